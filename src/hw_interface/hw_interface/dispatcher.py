@@ -1,0 +1,156 @@
+"""CommandDispatcher: checks every commander.srv request, then calls the driver.
+
+A refused request never reaches the driver; the answer always carries a Result code and
+a reason the server logs. This is the logic of motion_controller_server, kept out of the
+node so it is testable without ROS.
+"""
+import threading
+from dataclasses import dataclass, field
+from typing import Optional, Sequence
+
+import numpy as np
+
+from .errors import HwInterfaceError
+from .protocol import CommandIndex, Result
+from .robot_hw import RobotDriver
+
+
+@dataclass
+class Workspace:
+    """Axis-aligned box (m, robot base frame) the tool must stay inside."""
+
+    lower: np.ndarray = field(default_factory=lambda: np.array([-2.0, -2.0, 0.0]))
+    upper: np.ndarray = field(default_factory=lambda: np.array([2.0, 2.0, 2.0]))
+
+    def contains(self, position) -> bool:
+        """True when ``position`` lies inside the box."""
+        p = np.asarray(position, dtype=float)
+        return bool(np.all(p >= self.lower) and np.all(p <= self.upper))
+
+
+@dataclass
+class CommandResult:
+    """What the server answers: result code, reason, and the robot's current state."""
+
+    result: Result
+    reason: str = ""
+    joints: Sequence[float] = ()
+    position: Sequence[float] = ()
+    orientation: Sequence[float] = ()
+    robots: Sequence = ()
+
+
+class CommandDispatcher:
+    """Validates and executes commander.srv requests on one driver (thread-safe)."""
+
+    def __init__(self, driver: RobotDriver, workspace: Optional[Workspace] = None,
+                 max_stream_step: float = 0.2, user: str = "", password: str = ""):
+        self.driver = driver
+        self.workspace = workspace or Workspace()
+        # Largest joint change (rad) one streamed SetJoints may ask for: teleop streams
+        # small steps, so a bigger one is a jump the robot must never execute.
+        self.max_stream_step = float(max_stream_step)
+        self._user = user
+        self._password = password
+        self._blocking_motion = threading.Lock()
+
+    def handle(self, command_index: int, position=(), orientation=(), joints=(), url: str = "") -> CommandResult:
+        """Run one request; never raises, every failure becomes a Result code."""
+        try:
+            command = CommandIndex(command_index)
+        except ValueError:
+            known = ", ".join(f"{c.name}={c.value}" for c in CommandIndex)
+            return CommandResult(Result.UNKNOWN_COMMAND, f"unknown command_index {command_index}; known: {known}")
+        try:
+            refusal = self._validate(command, position, orientation, joints)
+            if refusal is not None:
+                return self._answer(refusal[0], refusal[1])
+            robots = self._execute(command, position, orientation, joints, url)
+            return self._answer(Result.SUCCESS, "", robots)
+        except HwInterfaceError as exc:
+            return self._answer(Result(exc.result), str(exc))
+        except Exception as exc:  # a driver bug must not kill the server; report it
+            return self._answer(Result.DRIVER_FAULT, f"driver error: {type(exc).__name__}: {exc}")
+
+    # -- validation ------------------------------------------------------------------------
+    def _validate(self, command, position, orientation, joints):
+        dof = len(self.driver.joint_names)
+        if command in (CommandIndex.SET_JOINTS, CommandIndex.MOVE_J):
+            return self._check_joints(command, joints, dof)
+        if command == CommandIndex.MOVE_L:
+            return self._check_pose(position, orientation)
+        return None
+
+    def _check_joints(self, command, joints, dof):
+        if len(joints) != dof:
+            return Result.WRONG_LENGTH, f"joints needs {dof} values for this robot, got {len(joints)}"
+        q = np.asarray(joints, dtype=float)
+        if not np.all(np.isfinite(q)):
+            return Result.NOT_FINITE, f"joints contains NaN or inf: {q.tolist()}"
+        lower, upper = self.driver.joint_limits
+        outside = np.flatnonzero((q < lower) | (q > upper))
+        if outside.size:
+            names = [self.driver.joint_names[i] for i in outside]
+            return Result.JOINT_LIMIT, f"joints {names} outside their limits"
+        if command == CommandIndex.SET_JOINTS:
+            current = self.driver.get_robot_joints()
+            step = float(np.max(np.abs(q - current)))
+            if step > self.max_stream_step:
+                return Result.TOO_FAR, (f"SET_JOINTS target is {step:.3f} rad from the robot (limit "
+                                        f"{self.max_stream_step:.3f}); use MOVE_J for large motions")
+        return None
+
+    def _check_pose(self, position, orientation):
+        if len(position) != 3 or len(orientation) != 4:
+            return Result.WRONG_LENGTH, (f"MOVE_L needs 3 position and 4 orientation values, got "
+                                         f"{len(position)} and {len(orientation)}")
+        p = np.asarray(position, dtype=float)
+        o = np.asarray(orientation, dtype=float)
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(o))):
+            return Result.NOT_FINITE, "position or orientation contains NaN or inf"
+        # float32 on the wire: allow its rounding, nothing more.
+        if abs(np.linalg.norm(o) - 1.0) > 1e-3:
+            return Result.BAD_ORIENTATION, f"orientation norm is {np.linalg.norm(o):.4f}, not 1 (x, y, z, w)"
+        if not self.workspace.contains(p):
+            return Result.OUT_OF_WORKSPACE, (f"position {p.round(3).tolist()} is outside the workspace box "
+                                             f"{self.workspace.lower.tolist()}..{self.workspace.upper.tolist()}")
+        return None
+
+    # -- execution -------------------------------------------------------------------------
+    def _execute(self, command, position, orientation, joints, url):
+        driver = self.driver
+        if command == CommandIndex.GET_ROBOTS:
+            return driver.get_robots()
+        if command == CommandIndex.LOGIN:
+            try:
+                driver.login(url, self._user, self._password)
+            except HwInterfaceError:
+                raise
+            except Exception as exc:
+                raise HwInterfaceError(f"login to {url!r} failed: {exc}", Result.LOGIN_FAILED) from None
+        elif command == CommandIndex.SET_JOINTS:
+            driver.set_joints(np.asarray(joints, dtype=float))
+        elif command == CommandIndex.STOP:
+            driver.stop()
+        elif command in (CommandIndex.MOVE_J, CommandIndex.MOVE_L):
+            if not self._blocking_motion.acquire(blocking=False):
+                raise HwInterfaceError("another MOVE_J/MOVE_L is running; wait or send STOP", Result.BUSY)
+            try:
+                if command == CommandIndex.MOVE_J:
+                    driver.move_j(np.asarray(joints, dtype=float))
+                else:
+                    driver.move_l(np.asarray(position, dtype=float), np.asarray(orientation, dtype=float))
+            finally:
+                self._blocking_motion.release()
+        return ()
+
+    def _answer(self, result: Result, reason: str, robots=()) -> CommandResult:
+        answer = CommandResult(result, reason, robots=robots)
+        try:
+            if self.driver.status().connected:
+                answer.joints = self.driver.get_robot_joints().tolist()
+                position, orientation = self.driver.get_robot_cartesian_position()
+                answer.position, answer.orientation = position.tolist(), orientation.tolist()
+        except Exception:  # the state is a courtesy; the result code already says it all
+            pass
+        return answer

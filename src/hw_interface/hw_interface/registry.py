@@ -1,0 +1,54 @@
+"""Drivers are found by name: built-ins here, plus any installed Python package that
+declares an entry point in the ``hw_interface.drivers`` group (the paper's "driver update"
+pattern: a new robot plugs in without touching this package)."""
+from importlib import import_module
+from importlib.metadata import entry_points
+from typing import Callable, Dict
+
+from .errors import HwInterfaceError
+
+ENTRY_POINT_GROUP = "hw_interface.drivers"
+
+# name -> "module:attribute"; imported lazily so a missing optional dependency of one
+# driver never stops the others from loading.
+_BUILTIN = {
+    "pybullet": "hw_interface.sim_driver:PybulletSimDriver",
+}
+_registered: Dict[str, Callable] = {}
+
+
+def register_driver(name: str, factory: Callable) -> None:
+    """Register a driver factory (a RobotDriver subclass or a callable) under ``name``."""
+    _registered[name] = factory
+
+
+def available_drivers():
+    """Sorted names of every driver that can be created."""
+    plugins = {ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)}
+    return sorted(set(_BUILTIN) | set(_registered) | plugins)
+
+
+def _load(target: str) -> Callable:
+    module_name, _, attribute = target.partition(":")
+    return getattr(import_module(module_name), attribute)
+
+
+def driver_factory(name: str) -> Callable:
+    """The factory of driver ``name``; raises HwInterfaceError naming the known drivers."""
+    if name in _registered:
+        return _registered[name]
+    if name in _BUILTIN:
+        return _load(_BUILTIN[name])
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        if ep.name == name:
+            return ep.load()
+    raise HwInterfaceError(f"no robot driver named {name!r}; available: {available_drivers()}")
+
+
+def create_driver(name: str, **params):
+    """Create driver ``name`` with its parameters."""
+    factory = driver_factory(name)
+    try:
+        return factory(**params)
+    except TypeError as exc:
+        raise HwInterfaceError(f"bad parameters for driver {name!r}: {exc}") from None

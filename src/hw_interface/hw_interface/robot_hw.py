@@ -1,0 +1,79 @@
+"""The robot driver template: the paper's API plus what real controllers need.
+
+A driver implements these few methods; motion_controller_server and every tool above it
+only ever talk to this interface (as ros_control's RobotHW does for C++ controllers).
+Poses are (position [m], quaternion x, y, z, w) of the tool in the robot base frame;
+joints are radians in the driver's ``joint_names`` order.
+"""
+import abc
+from dataclasses import dataclass
+from typing import List, Sequence, Tuple
+
+import numpy as np
+
+
+@dataclass
+class DriverStatus:
+    """What a driver reports about its controller."""
+
+    connected: bool = False
+    moving: bool = False
+    fault: str = ""
+    protective_stop: bool = False
+
+
+class RobotDriver(abc.ABC):
+    """Base class of every robot driver. Methods raise HwInterfaceError on failure."""
+
+    #: Registry name of the driver (e.g. "pybullet", "ur_rtde").
+    name = ""
+
+    @property
+    @abc.abstractmethod
+    def joint_names(self) -> List[str]:
+        """Joint names in command order."""
+
+    @property
+    @abc.abstractmethod
+    def joint_limits(self) -> Tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) joint limits."""
+
+    @abc.abstractmethod
+    def get_robots(self) -> List[Tuple[str, int]]:
+        """GetRobots: (name, DOF) of every robot this driver can drive."""
+
+    @abc.abstractmethod
+    def login(self, url: str, user: str = "", password: str = "") -> None:
+        """Login: connect to the controller at ``url``."""
+
+    @abc.abstractmethod
+    def disconnect(self) -> None:
+        """Stop the robot and close the connection; safe to call twice."""
+
+    @abc.abstractmethod
+    def get_robot_joints(self) -> np.ndarray:
+        """GetRobotJoints: measured joint positions."""
+
+    @abc.abstractmethod
+    def get_robot_cartesian_position(self) -> Tuple[np.ndarray, np.ndarray]:
+        """GetRobotCartesianPosition: measured tool pose."""
+
+    @abc.abstractmethod
+    def set_joints(self, joints: Sequence[float]) -> None:
+        """SetJoints: stream a servo target; returns at once."""
+
+    @abc.abstractmethod
+    def move_j(self, joints: Sequence[float], timeout: float = 30.0) -> None:
+        """MoveJ: joint-interpolated motion to ``joints``; blocks until done."""
+
+    @abc.abstractmethod
+    def move_l(self, position: Sequence[float], orientation: Sequence[float], timeout: float = 30.0) -> None:
+        """MoveL: straight-line tool motion with slerped orientation; blocks until done."""
+
+    @abc.abstractmethod
+    def stop(self) -> None:
+        """Stop any motion and streaming at once; the robot holds where it is."""
+
+    @abc.abstractmethod
+    def status(self) -> DriverStatus:
+        """Connection, motion and fault state."""

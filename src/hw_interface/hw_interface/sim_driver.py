@@ -1,0 +1,250 @@
+"""pybullet simulation driver: the robot's URDF in a physics world, stepped in real time
+in its own thread, under position control (DIRECT mode by default, GUI on request)."""
+import threading
+import time
+from typing import Optional
+
+import numpy as np
+import pybullet
+from pybullet_utils import bullet_client
+from scipy.spatial.transform import Rotation, Slerp
+
+from motion_commander.kinematics import RobotKinematics, pose_to_se3
+
+from .errors import HwInterfaceError
+from .protocol import Result
+from .robot_hw import DriverStatus, RobotDriver
+from .trajectory import JointPath, joint_move_duration, trapezoid_duration
+
+
+class PybulletSimDriver(RobotDriver):
+    """Simulated arm. ``login("sim://")`` starts the physics; ``disconnect()`` ends it.
+
+    Parameters: ``urdf_path`` of the robot, ``tool_frame`` (a link name), ``gui``,
+    ``time_step`` (s), ``initial_joints`` (rad), ``speed_scale`` (fraction of the URDF
+    velocity limits MoveJ/MoveL use), ``max_acceleration`` (rad/s^2),
+    ``cartesian_speed`` (m/s, MoveL), ``real_time`` (False steps as fast as possible).
+    """
+
+    name = "pybullet"
+
+    def __init__(self, urdf_path: str, tool_frame: str = "tool0", gui: bool = False, time_step: float = 0.002,
+                 initial_joints=None, speed_scale: float = 0.5, max_acceleration: float = 3.0,
+                 cartesian_speed: float = 0.25, real_time: bool = True, robot_name: Optional[str] = None):
+        self.kinematics = RobotKinematics(urdf_path, tool_frame)
+        self.urdf_path = urdf_path
+        self.tool_frame = tool_frame
+        self.gui = gui
+        self.time_step = float(time_step)
+        self.speed_scale = float(speed_scale)
+        self.max_acceleration = float(max_acceleration)
+        self.cartesian_speed = float(cartesian_speed)
+        self.real_time = real_time
+        self.robot_name = robot_name or self.kinematics.model.name
+        dof = self.kinematics.dof
+        self._initial = np.zeros(dof) if initial_joints is None else np.asarray(initial_joints, dtype=float)
+        if self._initial.shape != (dof,):
+            raise HwInterfaceError(f"initial_joints needs {dof} values, got {self._initial.shape}", Result.WRONG_LENGTH)
+        # One lock guards the bullet client and the targets: pybullet is not thread-safe.
+        self._lock = threading.Lock()
+        self._client = None
+        self._body = None
+        self._joint_indices = []
+        self._tool_link = -1
+        self._target = self._initial.copy()
+        self._path: Optional[JointPath] = None
+        self._path_start = 0.0
+        self._path_done = threading.Event()
+        self._sim_time = 0.0
+        self._thread: Optional[threading.Thread] = None
+        self._running = threading.Event()
+        self.steps = 0
+        self.overruns = 0
+
+    # -- template: connection ------------------------------------------------------------
+    @property
+    def joint_names(self):
+        return list(self.kinematics.joint_names)
+
+    @property
+    def joint_limits(self):
+        return self.kinematics.lower.copy(), self.kinematics.upper.copy()
+
+    def get_robots(self):
+        return [(self.robot_name, self.kinematics.dof)]
+
+    def login(self, url: str = "sim://", user: str = "", password: str = "") -> None:
+        if self._client is not None:
+            return
+        if url and not url.startswith("sim"):
+            raise HwInterfaceError(f"the pybullet driver connects to 'sim://', not {url!r}", Result.LOGIN_FAILED)
+        self._client = bullet_client.BulletClient(connection_mode=pybullet.GUI if self.gui else pybullet.DIRECT)
+        self._client.setGravity(0, 0, -9.81)
+        self._client.setTimeStep(self.time_step)
+        self._body = self._client.loadURDF(self.urdf_path, useFixedBase=True,
+                                           flags=pybullet.URDF_USE_INERTIA_FROM_FILE)
+        by_name = {}
+        for index in range(self._client.getNumJoints(self._body)):
+            info = self._client.getJointInfo(self._body, index)
+            by_name[info[1].decode()] = index
+            if info[12].decode() == self.tool_frame:
+                self._tool_link = index
+        missing = [n for n in self.joint_names if n not in by_name]
+        if missing or self._tool_link < 0:
+            self._client.disconnect()
+            self._client = None
+            raise HwInterfaceError(f"pybullet model lacks joints {missing} or tool link {self.tool_frame!r}",
+                                   Result.LOGIN_FAILED)
+        self._joint_indices = [by_name[n] for n in self.joint_names]
+        self._efforts = np.array([self._client.getJointInfo(self._body, i)[10] for i in self._joint_indices])
+        for index, value in zip(self._joint_indices, self._initial):
+            self._client.resetJointState(self._body, index, float(value))
+        self._target = self._initial.copy()
+        self._running.set()
+        self._thread = threading.Thread(target=self._step_loop, name="pybullet-step", daemon=True)
+        self._thread.start()
+
+    def disconnect(self) -> None:
+        self._running.clear()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+            self._thread = None
+        with self._lock:
+            if self._client is not None:
+                self._client.disconnect()
+                self._client = None
+
+    # -- template: state -------------------------------------------------------------------
+    def _require_connection(self):
+        if self._client is None:
+            raise HwInterfaceError("the simulation is not running: call LOGIN with url 'sim://' first",
+                                   Result.NOT_CONNECTED)
+
+    def get_robot_joints(self) -> np.ndarray:
+        with self._lock:
+            self._require_connection()
+            states = self._client.getJointStates(self._body, self._joint_indices)
+        return np.array([s[0] for s in states])
+
+    def get_joint_velocities(self) -> np.ndarray:
+        """Measured joint velocities (rad/s)."""
+        with self._lock:
+            self._require_connection()
+            states = self._client.getJointStates(self._body, self._joint_indices)
+        return np.array([s[1] for s in states])
+
+    def get_robot_cartesian_position(self):
+        with self._lock:
+            self._require_connection()
+            state = self._client.getLinkState(self._body, self._tool_link, computeForwardKinematics=True)
+        return np.array(state[4]), np.array(state[5])
+
+    def status(self) -> DriverStatus:
+        moving = self._path is not None
+        return DriverStatus(connected=self._client is not None, moving=moving)
+
+    @property
+    def sim_time(self) -> float:
+        """Simulated seconds since login."""
+        return self._sim_time
+
+    # -- template: motion ------------------------------------------------------------------
+    def set_joints(self, joints) -> None:
+        target = np.asarray(joints, dtype=float)
+        with self._lock:
+            self._require_connection()
+            if self._path is not None:
+                raise HwInterfaceError("a MoveJ/MoveL is running; STOP it before streaming", Result.BUSY)
+            self._target = target
+
+    def move_j(self, joints, timeout: float = 30.0) -> None:
+        goal = np.asarray(joints, dtype=float)
+        start = self._current_command()
+        duration = joint_move_duration(start, goal, self.kinematics.velocity_limits * self.speed_scale,
+                                       self.max_acceleration)
+        self._run_path(JointPath([start, goal], duration), timeout)
+
+    def move_l(self, position, orientation, timeout: float = 30.0) -> None:
+        start = self._current_command()
+        start_pos, start_quat = self.kinematics.forward_pose(start)
+        goal_pos = np.asarray(position, dtype=float)
+        rotations = Rotation.from_quat([start_quat, np.asarray(orientation, dtype=float)])
+        distance = float(np.linalg.norm(goal_pos - start_pos))
+        angle = float((rotations[0].inv() * rotations[1]).magnitude())
+        # One waypoint per 5 mm / 2 degrees keeps the joint-space chords close to the line.
+        count = int(max(2, np.ceil(distance / 0.005), np.ceil(angle / np.radians(2.0)))) + 1
+        fractions = np.linspace(0.0, 1.0, count)
+        slerp = Slerp([0.0, 1.0], rotations)
+        waypoints, seed = [start], start
+        for fraction, rotation in zip(fractions[1:], slerp(fractions[1:])):
+            point = start_pos + fraction * (goal_pos - start_pos)
+            result = self.kinematics.solve_ik(pose_to_se3(point, rotation.as_quat()), seed)
+            if not result.success:
+                raise HwInterfaceError(f"MoveL target unreachable at {fraction:.0%} of the line "
+                                       f"(IK error {result.position_error * 1000:.1f} mm)", Result.UNREACHABLE)
+            waypoints.append(result.joints)
+            seed = result.joints
+        waypoints = np.array(waypoints)
+        steps = np.abs(np.diff(waypoints, axis=0)).max(axis=0) * (count - 1)
+        duration = max(joint_move_duration(np.zeros_like(steps), steps,
+                                           self.kinematics.velocity_limits * self.speed_scale,
+                                           self.max_acceleration),
+                       4.0 / 3.0 * trapezoid_duration(distance, self.cartesian_speed, self.max_acceleration))
+        self._run_path(JointPath(waypoints, duration), timeout)
+
+    def stop(self) -> None:
+        with self._lock:
+            if self._client is None:
+                return
+            states = self._client.getJointStates(self._body, self._joint_indices)
+            self._target = np.array([s[0] for s in states])
+            self._path = None
+            self._path_done.set()
+
+    # -- internals -------------------------------------------------------------------------
+    def _current_command(self) -> np.ndarray:
+        with self._lock:
+            self._require_connection()
+            if self._path is not None:
+                raise HwInterfaceError("another MoveJ/MoveL is running; wait or STOP it", Result.BUSY)
+            return self._target.copy()
+
+    def _run_path(self, path: JointPath, timeout: float) -> None:
+        with self._lock:
+            self._require_connection()
+            self._path = path
+            self._path_start = self._sim_time
+            self._path_done.clear()
+        if not self._path_done.wait(timeout=max(timeout, 0.0)):
+            self.stop()
+            raise HwInterfaceError(f"motion did not finish within {timeout:.1f} s; stopped", Result.TIMEOUT)
+
+    def _step_loop(self) -> None:
+        next_tick = time.perf_counter()
+        while self._running.is_set():
+            with self._lock:
+                if self._client is None:
+                    break
+                if self._path is not None:
+                    elapsed = self._sim_time - self._path_start
+                    self._target = self._path.sample(elapsed)
+                    if elapsed >= self._path.duration:
+                        self._path = None
+                        self._path_done.set()
+                self._client.setJointMotorControlArray(
+                    self._body, self._joint_indices, pybullet.POSITION_CONTROL,
+                    targetPositions=self._target.tolist(), forces=(self._efforts * 4.0).tolist(),
+                    positionGains=[0.6] * len(self._joint_indices))
+                self._client.stepSimulation()
+                self._sim_time += self.time_step
+                self.steps += 1
+            if not self.real_time:
+                continue
+            next_tick += self.time_step
+            delay = next_tick - time.perf_counter()
+            if delay > 0:
+                time.sleep(delay)
+            elif delay < -10 * self.time_step:
+                # Far behind (machine busy): count it and resynchronise instead of racing.
+                self.overruns += 1
+                next_tick = time.perf_counter()

@@ -1,0 +1,108 @@
+"""Robot kinematics from a URDF with pinocchio: forward kinematics, Jacobians and
+damped-least-squares inverse kinematics warm-started from the current joints."""
+import os
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import MotionCommanderError
+
+
+def pose_to_se3(position, orientation) -> pin.SE3:
+    """SE3 from a position (m) and a quaternion (x, y, z, w)."""
+    quat = np.asarray(orientation, dtype=float)
+    return pin.XYZQUATToSE3(np.concatenate([np.asarray(position, dtype=float), quat / np.linalg.norm(quat)]))
+
+
+def se3_to_pose(transform: pin.SE3):
+    """(position, quaternion x, y, z, w) of an SE3."""
+    xyzquat = pin.SE3ToXYZQUAT(transform)
+    return np.array(xyzquat[:3]), np.array(xyzquat[3:])
+
+
+@dataclass
+class IkResult:
+    """Outcome of an IK solve: joints, whether the tolerance was met, residual error."""
+
+    joints: np.ndarray
+    success: bool
+    position_error: float
+    rotation_error: float
+    iterations: int
+
+
+class RobotKinematics:
+    """Kinematics of one serial arm loaded from a URDF file.
+
+    Not thread-safe: it keeps one pinocchio Data buffer; give each thread its own instance.
+    """
+
+    def __init__(self, urdf_path: str, tool_frame: str = "tool0"):
+        if not os.path.isfile(urdf_path):
+            raise MotionCommanderError(f"URDF file {urdf_path!r} does not exist; pass the path of the robot's URDF")
+        try:
+            self.model = pin.buildModelFromUrdf(urdf_path)
+        except (RuntimeError, ValueError) as exc:
+            raise MotionCommanderError(f"pinocchio cannot load URDF {urdf_path!r}: {exc}") from None
+        if not self.model.existFrame(tool_frame):
+            frames = [f.name for f in self.model.frames]
+            raise MotionCommanderError(f"URDF {urdf_path!r} has no frame {tool_frame!r}; its frames are {frames}")
+        if self.model.nq != self.model.nv:
+            raise MotionCommanderError("only arms of revolute/prismatic joints are supported (nq != nv)")
+        self.urdf_path = urdf_path
+        self.data = self.model.createData()
+        self.tool_frame = tool_frame
+        self.tool_id = self.model.getFrameId(tool_frame)
+        self.joint_names = [name for name in list(self.model.names)[1:]]
+        self.lower = np.array(self.model.lowerPositionLimit)
+        self.upper = np.array(self.model.upperPositionLimit)
+        self.velocity_limits = np.array(self.model.velocityLimit)
+
+    @property
+    def dof(self) -> int:
+        """Number of joints."""
+        return self.model.nq
+
+    def forward(self, joints) -> pin.SE3:
+        """Tool pose in the base frame at ``joints``."""
+        pin.framesForwardKinematics(self.model, self.data, np.asarray(joints, dtype=float))
+        return self.data.oMf[self.tool_id].copy()
+
+    def forward_pose(self, joints):
+        """Tool (position, quaternion x, y, z, w) in the base frame at ``joints``."""
+        return se3_to_pose(self.forward(joints))
+
+    def jacobian(self, joints) -> np.ndarray:
+        """6 x dof tool Jacobian in the LOCAL_WORLD_ALIGNED frame (linear rows first)."""
+        q = np.asarray(joints, dtype=float)
+        return pin.computeFrameJacobian(self.model, self.data, q, self.tool_id, pin.LOCAL_WORLD_ALIGNED)
+
+    def within_limits(self, joints, margin: float = 0.0) -> bool:
+        """True when every joint lies inside its limits shrunk by ``margin``."""
+        q = np.asarray(joints, dtype=float)
+        return bool(np.all(q >= self.lower + margin) and np.all(q <= self.upper - margin))
+
+    def solve_ik(self, target: pin.SE3, seed, max_iterations: int = 50, position_tolerance: float = 1e-4,
+                 rotation_tolerance: float = 1e-3, damping: float = 1e-4) -> IkResult:
+        """Damped-least-squares IK toward ``target`` starting at ``seed`` (warm start).
+
+        Each step is clipped to the joint limits, so the result is always inside them; when
+        the target is unreachable the closest solution found is returned with success False.
+        """
+        q = np.clip(np.asarray(seed, dtype=float), self.lower, self.upper)
+        error = np.zeros(6)
+        for iteration in range(max_iterations + 1):
+            pin.framesForwardKinematics(self.model, self.data, q)
+            current_to_target = self.data.oMf[self.tool_id].actInv(target)
+            error = pin.log6(current_to_target).vector
+            if np.linalg.norm(error[:3]) < position_tolerance and np.linalg.norm(error[3:]) < rotation_tolerance:
+                return IkResult(q, True, float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:])), iteration)
+            if iteration == max_iterations:
+                break
+            jac = pin.computeFrameJacobian(self.model, self.data, q, self.tool_id, pin.LOCAL)
+            jac = pin.Jlog6(current_to_target.inverse()) @ jac
+            # Damping keeps the step bounded near singularities instead of exploding.
+            step = jac.T @ np.linalg.solve(jac @ jac.T + damping * np.eye(6), error)
+            q = np.clip(pin.integrate(self.model, q, step), self.lower, self.upper)
+        return IkResult(q, False, float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:])), max_iterations)

@@ -1,0 +1,145 @@
+"""Figures and plot of a teleop session: how well the tool followed the scaled hand path
+and how long commands took from sensor to driver. Pure Python (numpy, matplotlib Agg)."""
+import json
+from dataclasses import dataclass, field
+from typing import List
+
+import numpy as np
+
+
+@dataclass
+class SessionData:
+    """What a monitor collected during a session (times in seconds, positions in metres).
+
+    ``targets`` rows are (sensor stamp, x, y, z) of the mapped tool target (the scaled
+    hand path in the robot base frame); ``tools`` rows are (stamp, x, y, z) of the measured
+    tool; ``latencies`` are sensor-to-driver seconds of accepted commands.
+    """
+
+    frames_in: int = 0
+    frames_out: int = 0
+    frames_dropped: int = 0
+    commands_refused: int = 0
+    targets: List[tuple] = field(default_factory=list)
+    tools: List[tuple] = field(default_factory=list)
+    latencies: List[float] = field(default_factory=list)
+
+
+def tracking_errors(targets: np.ndarray, tools: np.ndarray) -> np.ndarray:
+    """Distance (m) from each tool sample to the target interpolated at the same time.
+
+    Only tool samples inside the span of the target stream count: before engage and after
+    the last command there is nothing to follow.
+    """
+    if len(targets) < 2 or len(tools) == 0:
+        return np.zeros(0)
+    inside = (tools[:, 0] >= targets[0, 0]) & (tools[:, 0] <= targets[-1, 0])
+    t = tools[inside, 0]
+    wanted = np.column_stack([np.interp(t, targets[:, 0], targets[:, axis]) for axis in (1, 2, 3)])
+    return np.linalg.norm(tools[inside, 1:] - wanted, axis=1)
+
+
+def final_error(targets: np.ndarray, tools: np.ndarray) -> float:
+    """Distance (m) between the last target and the last tool sample (settled error)."""
+    if len(targets) == 0 or len(tools) == 0:
+        return float("nan")
+    return float(np.linalg.norm(tools[-1, 1:] - targets[-1, 1:]))
+
+
+def summarize(data: SessionData) -> dict:
+    """The session's figures as a JSON-ready dict (errors in mm, latencies in ms)."""
+    targets = np.asarray(data.targets, dtype=float).reshape(-1, 4)
+    tools = np.asarray(data.tools, dtype=float).reshape(-1, 4)
+    errors = tracking_errors(targets, tools) * 1000.0
+    latencies = np.asarray(data.latencies, dtype=float) * 1000.0
+
+    def pct(values, q):
+        return round(float(np.percentile(values, q)), 3) if len(values) else None
+
+    path_length = float(np.sum(np.linalg.norm(np.diff(targets[:, 1:], axis=0), axis=1))) if len(targets) > 1 else 0.0
+    return {
+        "frames_in": data.frames_in,
+        "frames_out": data.frames_out,
+        "frames_dropped": data.frames_dropped,
+        "commands_sent": len(targets),
+        "commands_refused": data.commands_refused,
+        "hand_path_length_mm": round(path_length * 1000.0, 1),
+        "tracking_error_rms_mm": round(float(np.sqrt(np.mean(errors ** 2))), 3) if len(errors) else None,
+        "tracking_error_p95_mm": pct(errors, 95),
+        "tracking_error_max_mm": round(float(errors.max()), 3) if len(errors) else None,
+        "final_error_mm": round(final_error(targets, tools) * 1000.0, 3),
+        "latency_p50_ms": pct(latencies, 50),
+        "latency_p99_ms": pct(latencies, 99),
+        "latency_samples": int(len(latencies)),
+    }
+
+
+def format_summary(summary: dict, plot_path: str = "") -> str:
+    """Human-readable summary block for the end of a run."""
+    def show(value, unit):
+        return "n/a" if value is None else f"{value} {unit}"
+
+    lines = [
+        "=== teleop session summary ===",
+        f"frames in (device)       : {summary['frames_in']}",
+        f"frames out (sequencer)   : {summary['frames_out']}",
+        f"frames dropped           : {summary['frames_dropped']}",
+        f"commands sent / refused  : {summary['commands_sent']} / {summary['commands_refused']}",
+        f"hand path (scaled)       : {summary['hand_path_length_mm']} mm",
+        f"tracking error rms / p95 / max : {show(summary['tracking_error_rms_mm'], 'mm')} / "
+        f"{show(summary['tracking_error_p95_mm'], 'mm')} / {show(summary['tracking_error_max_mm'], 'mm')}",
+        f"final error (settled)    : {summary['final_error_mm']} mm",
+        f"latency sensor->driver p50 / p99 : {show(summary['latency_p50_ms'], 'ms')} / "
+        f"{show(summary['latency_p99_ms'], 'ms')} ({summary['latency_samples']} commands)",
+    ]
+    if plot_path:
+        lines.append(f"plot                     : {plot_path}")
+    return "\n".join(lines)
+
+
+def plot_session(data: SessionData, path: str, title: str = "teleop session") -> str:
+    """Write a PNG of the scaled hand path against the tool path; return its path."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    targets = np.asarray(data.targets, dtype=float).reshape(-1, 4)
+    tools = np.asarray(data.tools, dtype=float).reshape(-1, 4)
+    t0 = targets[0, 0] if len(targets) else (tools[0, 0] if len(tools) else 0.0)
+    if len(targets):  # show the tool only around the commanded span
+        tools = tools[(tools[:, 0] >= t0 - 0.5) & (tools[:, 0] <= targets[-1, 0] + 1.0)]
+    fig = plt.figure(figsize=(12, 7))
+    grid = fig.add_gridspec(3, 2, width_ratios=[1.4, 1])
+    for axis, name in enumerate("xyz"):
+        ax = fig.add_subplot(grid[axis, 0])
+        if len(targets):
+            ax.plot(targets[:, 0] - t0, targets[:, axis + 1] * 1000, label="hand path (scaled, robot frame)", lw=1.5)
+        if len(tools):
+            ax.plot(tools[:, 0] - t0, tools[:, axis + 1] * 1000, "--", label="tool path (simulated arm)", lw=1.2)
+        ax.set_ylabel(f"{name} [mm]")
+        ax.grid(alpha=0.3)
+        if axis == 0:
+            ax.legend(loc="best", fontsize=8)
+            ax.set_title(title)
+    ax.set_xlabel("time since engage [s]")
+    top = fig.add_subplot(grid[:, 1])
+    if len(targets):
+        top.plot(targets[:, 1] * 1000, targets[:, 2] * 1000, label="hand path (scaled)")
+    if len(tools):
+        top.plot(tools[:, 1] * 1000, tools[:, 2] * 1000, "--", label="tool path")
+    top.set_xlabel("x [mm]")
+    top.set_ylabel("y [mm]")
+    top.set_title("top view (robot base frame)")
+    top.axis("equal")
+    top.grid(alpha=0.3)
+    top.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def write_summary_json(summary: dict, path: str) -> None:
+    """Write the summary dict as JSON."""
+    with open(path, "w", encoding="utf-8") as fh:
+        json.dump(summary, fh, indent=2, sort_keys=True)

@@ -1,0 +1,94 @@
+"""Teleop mapping: hand motion since the clutch engaged, scaled, becomes tool motion.
+
+At engage, the current hand pose and tool pose become the reference; afterwards the tool
+target is the reference tool pose moved by the hand's displacement (scaled by the speed
+ratio) and rotated by the hand's rotation since engage. Because the first target equals the
+current tool pose, engaging never makes the robot jump.
+"""
+from typing import Optional
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .errors import MotionCommanderError
+
+
+class TeleopMapper:
+    """Relative, scaled mapping from hand space {O} to robot space {W}.
+
+    ``hand_to_robot`` is the 3x3 rotation of the device frame in the robot base frame
+    (identity when the device axes are aligned with the robot base).
+    """
+
+    def __init__(self, speed_ratio: float = 1.0, hand_to_robot=None, follow_orientation: bool = True):
+        if not (np.isfinite(speed_ratio) and speed_ratio > 0):
+            raise MotionCommanderError(f"speed_ratio must be a finite number > 0, got {speed_ratio!r}")
+        rotation = np.eye(3) if hand_to_robot is None else np.asarray(hand_to_robot, dtype=float)
+        if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6):
+            raise MotionCommanderError("hand_to_robot must be a 3x3 rotation matrix")
+        self.speed_ratio = float(speed_ratio)
+        self.hand_to_robot = Rotation.from_matrix(rotation)
+        self.follow_orientation = follow_orientation
+        self._hand_ref = None
+        self._tool_ref = None
+
+    @property
+    def engaged(self) -> bool:
+        """True between engage() and disengage()."""
+        return self._hand_ref is not None
+
+    def engage(self, hand_position, hand_orientation, tool_position, tool_orientation) -> None:
+        """Take the current hand and tool poses as the reference of relative motion."""
+        self._hand_ref = (np.array(hand_position, dtype=float), Rotation.from_quat(hand_orientation))
+        self._tool_ref = (np.array(tool_position, dtype=float), Rotation.from_quat(tool_orientation))
+
+    def disengage(self) -> None:
+        """Drop the reference; target() is unavailable until the next engage()."""
+        self._hand_ref = None
+        self._tool_ref = None
+
+    def target(self, hand_position, hand_orientation):
+        """Tool target (position, quaternion x, y, z, w) for the given hand pose."""
+        if not self.engaged:
+            raise MotionCommanderError("teleop is not engaged; call engage() first")
+        hand_p0, hand_r0 = self._hand_ref
+        tool_p0, tool_r0 = self._tool_ref
+        displacement = self.hand_to_robot.apply(np.asarray(hand_position, dtype=float) - hand_p0)
+        position = tool_p0 + self.speed_ratio * displacement
+        if not self.follow_orientation:
+            return position, tool_r0.as_quat()
+        # The hand's rotation since engage, re-expressed in the robot base frame, is applied
+        # to the tool in the base frame, so turning the hand turns the tool the same way.
+        delta = Rotation.from_quat(hand_orientation) * hand_r0.inv()
+        delta_robot = self.hand_to_robot * delta * self.hand_to_robot.inv()
+        return position, (delta_robot * tool_r0).as_quat()
+
+
+class AutoClutch:
+    """Engages once a hand has been tracked steadily, disengages when it is lost.
+
+    Steady means ``steady_frames`` consecutive frames with no gap above ``lost_after_s``.
+    """
+
+    def __init__(self, steady_frames: int = 10, lost_after_s: float = 0.2):
+        if steady_frames < 1 or not lost_after_s > 0:
+            raise MotionCommanderError("auto clutch needs steady_frames >= 1 and lost_after_s > 0")
+        self.steady_frames = steady_frames
+        self.lost_after_s = lost_after_s
+        self._count = 0
+        self._last_stamp: Optional[float] = None
+
+    def on_frame(self, stamp: float) -> bool:
+        """Record a tracked frame; return whether the clutch is now engaged."""
+        if self._last_stamp is not None and stamp - self._last_stamp > self.lost_after_s:
+            self._count = 0
+        self._last_stamp = stamp
+        self._count += 1
+        return self._count >= self.steady_frames
+
+    def hand_lost(self, now: float) -> bool:
+        """True when no frame came within ``lost_after_s`` before ``now``; resets the count."""
+        if self._last_stamp is None or now - self._last_stamp > self.lost_after_s:
+            self._count = 0
+            return True
+        return False

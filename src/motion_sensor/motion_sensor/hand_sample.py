@@ -1,0 +1,30 @@
+"""HandSample: the ROS-free form of one motion_sensor/hand message."""
+from dataclasses import dataclass, field
+from typing import Tuple
+
+import numpy as np
+
+
+@dataclass
+class HandSample:
+    """One tracking frame of the primary hand, in metres and REP 103 axes.
+
+    ``stamp`` is in seconds (the ROS header stamp), ``orientation`` is a unit quaternion
+    (x, y, z, w). ``hand_id`` identifies the tracked hand across frames when the device
+    provides it (-1 otherwise); ``device`` names the device that produced the frame.
+    """
+
+    stamp: float
+    position: np.ndarray
+    orientation: np.ndarray
+    hands_num: int = 1
+    hand_types: Tuple[str, ...] = ("right",)
+    frame_id: str = "leap"
+    hand_id: int = -1
+    device: str = ""
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def primary_type(self) -> str:
+        """Type ("left"/"right") of the primary hand, or "" when no hand is seen."""
+        return self.hand_types[0] if self.hand_types else ""
