@@ -53,7 +53,7 @@ def _segment_geometry(d, a, radius):
 
 
 def _fmt(values):
-    return " ".join(f"{v:.6g}" for v in values)
+    return " ".join(f"{v:.12g}" for v in values)
 
 
 def _link(name, mass, d, a, radius):

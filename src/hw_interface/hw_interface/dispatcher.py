@@ -128,6 +128,10 @@ class CommandDispatcher:
                 raise
             except Exception as exc:
                 raise HwInterfaceError(f"login to {url!r} failed: {exc}", Result.LOGIN_FAILED) from None
+        elif command == CommandIndex.GET_ROBOT_JOINTS:
+            driver.get_robot_joints()  # raises NOT_CONNECTED when there is no controller
+        elif command == CommandIndex.GET_ROBOT_CARTESIAN_POSITION:
+            driver.get_robot_cartesian_position()
         elif command == CommandIndex.SET_JOINTS:
             driver.set_joints(np.asarray(joints, dtype=float))
         elif command == CommandIndex.STOP:

@@ -239,6 +239,8 @@ class PybulletSimDriver(RobotDriver):
                 self._sim_time += self.time_step
                 self.steps += 1
             if not self.real_time:
+                # Yield the GIL and the lock so callers are not starved by a flat-out loop.
+                time.sleep(0)
                 continue
             next_tick += self.time_step
             delay = next_tick - time.perf_counter()

@@ -119,7 +119,8 @@ def plot_session(data: SessionData, path: str, title: str = "teleop session") ->
         ax.set_ylabel(f"{name} [mm]")
         ax.grid(alpha=0.3)
         if axis == 0:
-            ax.legend(loc="best", fontsize=8)
+            if len(targets) or len(tools):
+                ax.legend(loc="best", fontsize=8)
             ax.set_title(title)
     ax.set_xlabel("time since engage [s]")
     top = fig.add_subplot(grid[:, 1])
@@ -132,7 +133,8 @@ def plot_session(data: SessionData, path: str, title: str = "teleop session") ->
     top.set_title("top view (robot base frame)")
     top.axis("equal")
     top.grid(alpha=0.3)
-    top.legend(fontsize=8)
+    if len(targets) or len(tools):
+        top.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

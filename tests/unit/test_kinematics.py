@@ -1,0 +1,73 @@
+"""pinocchio kinematics of the shipped UR models: FK against the DH numbers, IK round trips."""
+import numpy as np
+import pytest
+
+from conftest import HOME, UR10E, UR5E
+from motion_commander.errors import MotionCommanderError
+from motion_commander.kinematics import RobotKinematics, pose_to_se3, se3_to_pose
+
+
+@pytest.fixture(scope="module")
+def ur5e():
+    return RobotKinematics(UR5E)
+
+
+def test_zero_pose_matches_ur5e_dh(ur5e):
+    # Stretched arm: x = a2 + a3, y = -(d4 + d6), z = d1 - d5 (UR's published DH).
+    position, _ = ur5e.forward_pose(np.zeros(6))
+    np.testing.assert_allclose(position, [-0.425 - 0.3922, -(0.1333 + 0.0996), 0.1625 - 0.0997], atol=1e-9)
+
+
+def test_ur10e_loads_with_its_own_dimensions():
+    kin = RobotKinematics(UR10E)
+    position, _ = kin.forward_pose(np.zeros(6))
+    assert position[0] == pytest.approx(-0.6127 - 0.57155)
+    assert kin.dof == 6 and kin.joint_names[0] == "shoulder_pan_joint"
+
+
+def test_home_points_the_tool_down(ur5e):
+    transform = ur5e.forward(HOME)
+    np.testing.assert_allclose(transform.rotation[:, 2], [0, 0, -1], atol=1e-9)
+
+
+def test_ik_round_trip_on_random_reachable_poses(ur5e, rng):
+    for _ in range(50):
+        goal_q = HOME + rng.uniform(-0.4, 0.4, 6)
+        target = ur5e.forward(goal_q)
+        seed = goal_q + rng.uniform(-0.1, 0.1, 6)
+        result = ur5e.solve_ik(target, seed)
+        assert result.success, result
+        reached = ur5e.forward(result.joints)
+        assert np.linalg.norm(reached.translation - target.translation) < 1e-4
+        assert ur5e.within_limits(result.joints)
+
+
+def test_ik_on_a_continuous_path_converges_every_step(ur5e):
+    q = HOME.copy()
+    start, _ = ur5e.forward_pose(q)
+    _, orientation = ur5e.forward_pose(q)
+    for t in np.linspace(0, 1, 200):
+        target = pose_to_se3(start + [0.1 * np.sin(2 * np.pi * t), 0.15 * t, -0.05 * t], orientation)
+        result = ur5e.solve_ik(target, q)
+        assert result.success and result.iterations <= 5
+        q = result.joints
+
+
+def test_unreachable_target_fails_inside_limits(ur5e):
+    result = ur5e.solve_ik(pose_to_se3([3.0, 0.0, 0.5], [0, 0, 0, 1]), HOME)
+    assert not result.success and result.position_error > 1.0
+    assert ur5e.within_limits(result.joints)
+
+
+def test_pose_conversions_round_trip():
+    position, quat = np.array([0.1, -0.2, 0.3]), np.array([0.0, 0.0, np.sin(0.4), np.cos(0.4)])
+    back_position, back_quat = se3_to_pose(pose_to_se3(position, quat))
+    np.testing.assert_allclose(back_position, position)
+    np.testing.assert_allclose(back_quat, quat, atol=1e-12)
+
+
+def test_bad_model_inputs_are_explained(tmp_path):
+    with pytest.raises(MotionCommanderError, match="does not exist"):
+        RobotKinematics(str(tmp_path / "none.urdf"))
+    with pytest.raises(MotionCommanderError, match="no frame"):
+        RobotKinematics(UR5E, tool_frame="gripper_tip")

@@ -1,0 +1,62 @@
+"""Session figures and plot, and the replay schedule."""
+import json
+import os
+
+import numpy as np
+import pytest
+
+from motion_commander.session_report import (SessionData, final_error, format_summary, plot_session, summarize,
+                                             tracking_errors, write_summary_json)
+from motion_sensor.replay import replay_schedule
+
+
+def line(t, offset=0.0):
+    return np.column_stack([t, 0.1 * t + offset, np.zeros_like(t), np.full_like(t, 0.5)])
+
+
+def test_tracking_error_interpolates_the_target_in_time():
+    t = np.linspace(0, 1, 101)
+    targets = line(t)
+    tools = line(t[::3] + 0.001, offset=0.002)[:-1]  # sampled at other times, 2 mm off in x
+    errors = tracking_errors(targets, tools)
+    np.testing.assert_allclose(errors, 0.002, atol=1e-9)
+
+
+def test_samples_outside_the_commanded_span_do_not_count():
+    targets = line(np.array([1.0, 2.0]))
+    tools = line(np.array([0.0, 1.5, 3.0]))
+    assert len(tracking_errors(targets, tools)) == 1
+
+
+def test_summary_figures(tmp_path):
+    t = np.linspace(0, 2, 201)
+    data = SessionData(frames_in=210, frames_out=205, frames_dropped=5, targets=[tuple(r) for r in line(t)],
+                       tools=[tuple(r) for r in line(t, offset=0.003)], latencies=list(np.linspace(0.001, 0.003, 201)))
+    summary = summarize(data)
+    assert summary["tracking_error_rms_mm"] == pytest.approx(3.0)
+    assert summary["final_error_mm"] == pytest.approx(3.0)
+    assert summary["latency_p50_ms"] == pytest.approx(2.0)
+    assert summary["hand_path_length_mm"] == pytest.approx(200.0)
+    text = format_summary(summary, "/x/plot.png")
+    assert "frames dropped           : 5" in text and "/x/plot.png" in text
+    png = plot_session(data, str(tmp_path / "p.png"))
+    assert open(png, "rb").read(8) == b"\x89PNG\r\n\x1a\n" and os.path.getsize(png) > 10_000
+    write_summary_json(summary, str(tmp_path / "s.json"))
+    assert json.load(open(tmp_path / "s.json"))["frames_in"] == 210
+
+
+def test_empty_session_reports_without_crashing(tmp_path):
+    summary = summarize(SessionData())
+    assert summary["tracking_error_rms_mm"] is None and "n/a" in format_summary(summary)
+    assert np.isnan(final_error(np.zeros((0, 4)), np.zeros((0, 4))))
+    plot_session(SessionData(), str(tmp_path / "empty.png"))
+
+
+def test_replay_schedule_rate_offset_and_fast_mode():
+    times = [10.0, 10.1, 10.3, 10.6]
+    assert list(replay_schedule(times)) == [(0, 0.0), (1, pytest.approx(0.1)), (2, pytest.approx(0.3)),
+                                            (3, pytest.approx(0.6))]
+    assert [due for _, due in replay_schedule(times, rate=2.0)] == pytest.approx([0, 0.05, 0.15, 0.3])
+    assert [i for i, _ in replay_schedule(times, start_offset=0.2)] == [2, 3]
+    assert {due for _, due in replay_schedule(times, rate=0)} == {0.0}
+    assert list(replay_schedule([])) == []
