@@ -79,6 +79,12 @@ class CommandDispatcher:
             return self._check_joints(command, joints, dof)
         if command == CommandIndex.MOVE_L:
             return self._check_pose(position, orientation)
+        if command == CommandIndex.SET_GRIPPER:
+            if len(joints) != 1 or joints[0] not in (0.0, 1.0):
+                return Result.WRONG_LENGTH, "SET_GRIPPER needs joints = [1] to grip or [0] to release"
+        if command == CommandIndex.SET_DIGITAL_OUTPUT:
+            if len(joints) != 2 or joints[1] not in (0.0, 1.0) or joints[0] != int(joints[0]) or joints[0] < 0:
+                return Result.WRONG_LENGTH, "SET_DIGITAL_OUTPUT needs joints = [output number, 0 or 1]"
         return None
 
     def _check_joints(self, command, joints, dof):
@@ -132,10 +138,18 @@ class CommandDispatcher:
             driver.get_robot_joints()  # raises NOT_CONNECTED when there is no controller
         elif command == CommandIndex.GET_ROBOT_CARTESIAN_POSITION:
             driver.get_robot_cartesian_position()
+        elif command in (CommandIndex.SET_JOINTS, CommandIndex.MOVE_J, CommandIndex.MOVE_L) \
+                and driver.status().protective_stop:
+            raise HwInterfaceError("the robot is in a protective stop; clear it, then command again",
+                                   Result.PROTECTIVE_STOP)
         elif command == CommandIndex.SET_JOINTS:
             driver.set_joints(np.asarray(joints, dtype=float))
         elif command == CommandIndex.STOP:
             driver.stop()
+        elif command == CommandIndex.SET_GRIPPER:
+            driver.set_gripper(bool(joints[0]))
+        elif command == CommandIndex.SET_DIGITAL_OUTPUT:
+            driver.set_digital_output(int(joints[0]), bool(joints[1]))
         elif command in (CommandIndex.MOVE_J, CommandIndex.MOVE_L):
             if not self._blocking_motion.acquire(blocking=False):
                 raise HwInterfaceError("another MOVE_J/MOVE_L is running; wait or send STOP", Result.BUSY)

@@ -17,6 +17,8 @@ class CommandIndex(enum.IntEnum):
     MOVE_L = 6
     MOVE_J = 7
     STOP = 8
+    SET_GRIPPER = 9
+    SET_DIGITAL_OUTPUT = 10
 
 
 class Result(enum.IntEnum):

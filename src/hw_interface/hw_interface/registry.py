@@ -13,6 +13,7 @@ ENTRY_POINT_GROUP = "hw_interface.drivers"
 # driver never stops the others from loading.
 _BUILTIN = {
     "pybullet": "hw_interface.sim_driver:PybulletSimDriver",
+    "ur_rtde": "hw_interface.ur_driver:URRtdeDriver",
 }
 _registered: Dict[str, Callable] = {}
 

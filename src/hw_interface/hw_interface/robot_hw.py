@@ -75,5 +75,13 @@ class RobotDriver(abc.ABC):
         """Stop any motion and streaming at once; the robot holds where it is."""
 
     @abc.abstractmethod
+    def set_gripper(self, closed: bool) -> None:
+        """Grip (True) or release (False) with the tool's gripper."""
+
+    @abc.abstractmethod
+    def set_digital_output(self, output: int, value: bool) -> None:
+        """Set one of the controller's digital outputs."""
+
+    @abc.abstractmethod
     def status(self) -> DriverStatus:
         """Connection, motion and fault state."""

@@ -1,5 +1,6 @@
 """pybullet simulation driver: the robot's URDF in a physics world, stepped in real time
 in its own thread, under position control (DIRECT mode by default, GUI on request)."""
+import os
 import threading
 import time
 from typing import Optional
@@ -17,20 +18,63 @@ from .robot_hw import DriverStatus, RobotDriver
 from .trajectory import JointPath, joint_move_duration, trapezoid_duration
 
 
+def load_scene(client, spec) -> dict:
+    """Create the scene's extra bodies; return {name: body id}.
+
+    Each entry is a dict with ``name`` and either ``urdf`` (a path, absolute or inside
+    pybullet_data) or ``box`` (half extents in m), plus ``position`` (m), ``rpy`` (rad),
+    ``mass`` (kg, 0 = fixed) and ``color`` (rgba) for boxes.
+    """
+    import pybullet_data
+    bodies = {}
+    for index, entry in enumerate(spec):
+        name = entry.get("name", f"body{index}")
+        position = entry.get("position", [0.0, 0.0, 0.0])
+        orientation = pybullet.getQuaternionFromEuler(entry.get("rpy", [0.0, 0.0, 0.0]))
+        if "urdf" in entry:
+            path = entry["urdf"]
+            if not os.path.isabs(path):
+                path = os.path.join(pybullet_data.getDataPath(), path)
+            if not os.path.isfile(path):
+                raise HwInterfaceError(f"scene body {name!r}: URDF {entry['urdf']!r} not found")
+            bodies[name] = client.loadURDF(path, position, orientation, useFixedBase=bool(entry.get("fixed", False)))
+        elif "box" in entry:
+            half = [float(v) for v in entry["box"]]
+            shape = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
+            visual = client.createVisualShape(pybullet.GEOM_BOX, halfExtents=half,
+                                              rgbaColor=entry.get("color", [0.8, 0.6, 0.2, 1.0]))
+            bodies[name] = client.createMultiBody(float(entry.get("mass", 0.1)), shape, visual, position, orientation)
+        else:
+            raise HwInterfaceError(f"scene body {name!r} needs 'urdf' or 'box'")
+    return bodies
+
+
+def entry_is_fixed(spec, name) -> bool:
+    """True when scene body ``name`` is static (fixed URDF or zero mass): never gripped."""
+    for index, entry in enumerate(spec):
+        if entry.get("name", f"body{index}") == name:
+            return bool(entry.get("fixed", False)) or ("box" in entry and float(entry.get("mass", 0.1)) == 0.0)
+    return False
+
+
 class PybulletSimDriver(RobotDriver):
     """Simulated arm. ``login("sim://")`` starts the physics; ``disconnect()`` ends it.
 
     Parameters: ``urdf_path`` of the robot, ``tool_frame`` (a link name), ``gui``,
     ``time_step`` (s), ``initial_joints`` (rad), ``speed_scale`` (fraction of the URDF
     velocity limits MoveJ/MoveL use), ``max_acceleration`` (rad/s^2),
-    ``cartesian_speed`` (m/s, MoveL), ``real_time`` (False steps as fast as possible).
+    ``cartesian_speed`` (m/s, MoveL), ``real_time`` (False steps as fast as possible),
+    ``scene`` (list of extra bodies, see load_scene), ``gripper_output`` (the digital
+    output that switches the suction gripper), ``gripper_reach`` (m from the tool frame
+    within which a body is picked).
     """
 
     name = "pybullet"
 
     def __init__(self, urdf_path: str, tool_frame: str = "tool0", gui: bool = False, time_step: float = 0.002,
                  initial_joints=None, speed_scale: float = 0.5, max_acceleration: float = 3.0,
-                 cartesian_speed: float = 0.25, real_time: bool = True, robot_name: Optional[str] = None):
+                 cartesian_speed: float = 0.25, real_time: bool = True, robot_name: Optional[str] = None,
+                 scene=None, gripper_output: int = 0, gripper_reach: float = 0.02):
         self.kinematics = RobotKinematics(urdf_path, tool_frame)
         self.urdf_path = urdf_path
         self.tool_frame = tool_frame
@@ -60,6 +104,13 @@ class PybulletSimDriver(RobotDriver):
         self._running = threading.Event()
         self.steps = 0
         self.overruns = 0
+        self.scene_spec = list(scene or [])
+        self.bodies = {}
+        self.gripper_output = int(gripper_output)
+        self.gripper_reach = float(gripper_reach)
+        self.outputs = {}
+        self._grip_constraint = None
+        self.gripped_body: Optional[str] = None
 
     # -- template: connection ------------------------------------------------------------
     @property
@@ -100,6 +151,7 @@ class PybulletSimDriver(RobotDriver):
         for index, value in zip(self._joint_indices, self._initial):
             self._client.resetJointState(self._body, index, float(value))
         self._target = self._initial.copy()
+        self.bodies = load_scene(self._client, self.scene_spec)
         self._running.set()
         self._thread = threading.Thread(target=self._step_loop, name="pybullet-step", daemon=True)
         self._thread.start()
@@ -200,6 +252,63 @@ class PybulletSimDriver(RobotDriver):
             self._target = np.array([s[0] for s in states])
             self._path = None
             self._path_done.set()
+
+    def set_gripper(self, closed: bool) -> None:
+        self.set_digital_output(self.gripper_output, closed)
+
+    def set_digital_output(self, output: int, value: bool) -> None:
+        with self._lock:
+            self._require_connection()
+            self.outputs[int(output)] = bool(value)
+            if int(output) == self.gripper_output:
+                self._switch_suction(bool(value))
+
+    def _switch_suction(self, on: bool) -> None:
+        """Attach the nearest scene body within reach with a fixed constraint, or release.
+
+        A constraint instead of contact physics makes the suction cup deterministic: a
+        gripped part never slips, which is what a teleop user expects from a vacuum cup.
+        """
+        client = self._client
+        if not on:
+            if self._grip_constraint is not None:
+                client.removeConstraint(self._grip_constraint)
+            self._grip_constraint, self.gripped_body = None, None
+            return
+        if self._grip_constraint is not None:
+            return
+        tool = client.getLinkState(self._body, self._tool_link, computeForwardKinematics=True)
+        # The tool frame is usually a massless frame without geometry: measure from the
+        # nearest ancestor link that has a collision shape (the flange link of an arm).
+        cup_link = self._tool_link
+        while cup_link >= 0 and not client.getCollisionShapeData(self._body, cup_link):
+            cup_link = client.getJointInfo(self._body, cup_link)[16]
+        best = None
+        for name, body in self.bodies.items():
+            if entry_is_fixed(self.scene_spec, name):
+                continue
+            points = client.getClosestPoints(self._body, body, self.gripper_reach, linkIndexA=cup_link)
+            if points:
+                distance = min(p[8] for p in points)
+                if best is None or distance < best[0]:
+                    best = (distance, name, body)
+        if best is None:
+            return  # nothing under the cup: the vacuum is on but grips nothing
+        _, name, body = best
+        body_pos, body_orn = client.getBasePositionAndOrientation(body)
+        inv_pos, inv_orn = client.invertTransform(tool[4], tool[5])
+        rel_pos, rel_orn = client.multiplyTransforms(inv_pos, inv_orn, body_pos, body_orn)
+        self._grip_constraint = client.createConstraint(self._body, self._tool_link, body, -1, pybullet.JOINT_FIXED,
+                                                        [0, 0, 0], rel_pos, [0, 0, 0], rel_orn)
+        client.changeConstraint(self._grip_constraint, maxForce=500)
+        self.gripped_body = name
+
+    def body_pose(self, name: str):
+        """(position, quaternion) of scene body ``name``."""
+        with self._lock:
+            self._require_connection()
+            position, orientation = self._client.getBasePositionAndOrientation(self.bodies[name])
+        return np.array(position), np.array(orientation)
 
     # -- internals -------------------------------------------------------------------------
     def _current_command(self) -> np.ndarray:

@@ -1,0 +1,91 @@
+"""Every driver honours the template the same way; the sim's gripper and scene; plugins."""
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from conftest import HOME, UR5E
+from hw_interface.fake_rtde import FakeUR
+from hw_interface.registry import available_drivers, create_driver
+from hw_interface.robot_hw import RobotDriver
+from hw_interface.sim_driver import PybulletSimDriver
+from hw_interface.ur_driver import URRtdeDriver
+
+
+def sim_driver():
+    return PybulletSimDriver(UR5E, initial_joints=HOME, real_time=False)
+
+
+def ur_driver():
+    return URRtdeDriver(UR5E, robot_ip="192.0.2.1", armed=True, rtde_classes=FakeUR(UR5E, HOME).classes())
+
+
+@pytest.mark.parametrize("factory", [sim_driver, ur_driver], ids=["pybullet", "ur_rtde"])
+def test_driver_follows_the_template(factory):
+    driver = factory()
+    assert isinstance(driver, RobotDriver)
+    assert not driver.status().connected
+    driver.login("")
+    try:
+        assert driver.status().connected
+        assert driver.get_robots()[0][1] == 6 and len(driver.joint_names) == 6
+        lower, upper = driver.joint_limits
+        assert np.all(lower < HOME) and np.all(HOME < upper)
+        goal = HOME + [0.1, -0.1, 0.1, 0.0, 0.1, -0.1]
+        driver.move_j(goal)
+        np.testing.assert_allclose(driver.get_robot_joints(), goal, atol=2e-3)
+        position, orientation = driver.get_robot_cartesian_position()
+        driver.move_l(position + [0.02, 0.0, -0.02], orientation)
+        np.testing.assert_allclose(driver.get_robot_cartesian_position()[0], position + [0.02, 0.0, -0.02], atol=2e-3)
+        driver.set_joints(driver.get_robot_joints())
+        driver.stop()
+        driver.set_gripper(True)
+        driver.set_gripper(False)
+        driver.set_digital_output(4, True)
+    finally:
+        driver.disconnect()
+        driver.disconnect()  # twice is harmless
+    assert not driver.status().connected
+
+
+def test_suction_gripper_picks_and_places_a_scene_box():
+    scene = [{"name": "floor", "urdf": "plane.urdf", "fixed": True},
+             {"name": "part", "box": [0.02, 0.02, 0.02], "mass": 0.1, "position": [-0.49, -0.13, 0.02]}]
+    sim = PybulletSimDriver(UR5E, initial_joints=HOME, real_time=False, scene=scene)
+    sim.login()
+    try:
+        position, orientation = sim.get_robot_cartesian_position()
+        sim.set_gripper(True)
+        assert sim.gripped_body is None  # nothing within reach 45 cm above the part
+        sim.set_gripper(False)
+        part, _ = sim.body_pose("part")
+        sim.move_l([part[0], part[1], part[2] + 0.02 + 0.005], orientation)  # cup 5 mm above the top face
+        sim.set_gripper(True)
+        assert sim.gripped_body == "part" and sim.outputs[0] is True
+        sim.move_l([part[0], part[1] + 0.1, 0.3], orientation)
+        lifted, _ = sim.body_pose("part")
+        assert lifted[2] > 0.2 and abs(lifted[1] - (part[1] + 0.1)) < 0.01
+        sim.set_gripper(False)
+        deadline = sim.sim_time + 1.0
+        while sim.sim_time < deadline:
+            time.sleep(0.001)
+        dropped, _ = sim.body_pose("part")
+        assert sim.gripped_body is None and dropped[2] < 0.05  # released: back on the floor
+    finally:
+        sim.disconnect()
+
+
+def test_plugin_driver_is_found_through_its_entry_point(tmp_path, monkeypatch):
+    (tmp_path / "my_robot_driver.py").write_text(
+        "from hw_interface.sim_driver import PybulletSimDriver\n"
+        "class MyDriver(PybulletSimDriver):\n    name = 'my_robot'\n")
+    dist = tmp_path / "my_robot_driver-1.0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: my-robot-driver\nVersion: 1.0\n")
+    (dist / "entry_points.txt").write_text("[hw_interface.drivers]\nmy_robot = my_robot_driver:MyDriver\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert "my_robot" in available_drivers()
+    driver = create_driver("my_robot", urdf_path=UR5E, real_time=False)
+    assert type(driver).__name__ == "MyDriver"
+    sys.modules.pop("my_robot_driver", None)
