@@ -53,7 +53,9 @@ class URRtdeDriver(RobotDriver):
     ``stream_timeout`` (s without a new target before streaming stops),
     ``gripper_output`` (standard digital output driving the gripper),
     ``reconnect_attempts`` and ``reconnect_backoff`` (s, doubled each attempt),
-    ``rtde_classes`` (control, receive, io classes; tests pass fakes).
+    ``rtde_classes`` (control, receive, io classes; tests pass fakes),
+    ``fake_controller`` (True: talk to hw_interface.fake_rtde instead of a controller, for
+    dry runs of a UR session without a robot; ``initial_joints`` sets its start pose).
     """
 
     name = "ur_rtde"
@@ -63,7 +65,7 @@ class URRtdeDriver(RobotDriver):
                  joint_speed: float = 1.0, joint_acceleration: float = 1.4, linear_speed: float = 0.25,
                  linear_acceleration: float = 1.2, stream_timeout: float = 0.1, gripper_output: int = 0,
                  reconnect_attempts: int = 3, reconnect_backoff: float = 0.5, robot_name: Optional[str] = None,
-                 rtde_classes=None):
+                 rtde_classes=None, fake_controller: bool = False, initial_joints=None):
         if not 0.03 <= lookahead_time <= 0.2:
             raise HwInterfaceError(f"lookahead_time must be 0.03-0.2 s (ur_rtde range), got {lookahead_time}")
         if not 100 <= gain <= 2000:
@@ -81,6 +83,9 @@ class URRtdeDriver(RobotDriver):
         self.reconnect_backoff = float(reconnect_backoff)
         self.robot_name = robot_name or self.kinematics.model.name
         self._classes = rtde_classes
+        if fake_controller and rtde_classes is None:
+            from .fake_rtde import FakeUR
+            self._classes = FakeUR(urdf_path, initial_joints, frequency).classes()
         self._control = self._receive = self._io = None
         # _lock guards the RTDE objects and the streaming state across the server's
         # service threads and the streaming thread.

@@ -67,7 +67,8 @@ def summarize(data: SessionData) -> dict:
         "tracking_error_rms_mm": round(float(np.sqrt(np.mean(errors ** 2))), 3) if len(errors) else None,
         "tracking_error_p95_mm": pct(errors, 95),
         "tracking_error_max_mm": round(float(errors.max()), 3) if len(errors) else None,
-        "final_error_mm": round(final_error(targets, tools) * 1000.0, 3),
+        "final_error_mm": None if not np.isfinite(final_error(targets, tools))
+        else round(final_error(targets, tools) * 1000.0, 3),
         "latency_p50_ms": pct(latencies, 50),
         "latency_p99_ms": pct(latencies, 99),
         "latency_samples": int(len(latencies)),
@@ -88,7 +89,7 @@ def format_summary(summary: dict, plot_path: str = "") -> str:
         f"hand path (scaled)       : {summary['hand_path_length_mm']} mm",
         f"tracking error rms / p95 / max : {show(summary['tracking_error_rms_mm'], 'mm')} / "
         f"{show(summary['tracking_error_p95_mm'], 'mm')} / {show(summary['tracking_error_max_mm'], 'mm')}",
-        f"final error (settled)    : {summary['final_error_mm']} mm",
+        f"final error (settled)    : {show(summary['final_error_mm'], 'mm')}",
         f"latency sensor->driver p50 / p99 : {show(summary['latency_p50_ms'], 'ms')} / "
         f"{show(summary['latency_p99_ms'], 'ms')} ({summary['latency_samples']} commands)",
     ]
