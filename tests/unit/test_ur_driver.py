@@ -99,7 +99,7 @@ def test_protective_stop_refuses_motion_reports_and_recovers(fake):
     driver.set_joints(HOME)
     fake.protective_stopped = True
     assert wait_for(lambda: "servoStop" in fake.names())  # streaming halted
-    assert driver.status().protective_stop
+    assert driver.status().protective_stop and driver.status().safety_mode == "protective_stop"
     answer = dispatcher.handle(CommandIndex.MOVE_J, joints=list(HOME))
     assert answer.result == Result.PROTECTIVE_STOP
     fake.protective_stopped = False  # cleared on the pendant

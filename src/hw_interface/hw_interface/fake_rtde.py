@@ -148,6 +148,10 @@ class _FakeReceive(_FakeInterface):
         self.fake.record("isProtectiveStopped")
         return self.fake.protective_stopped
 
+    def getSafetyMode(self):
+        self.fake.record("getSafetyMode")
+        return 3 if self.fake.protective_stopped else 1
+
     def isEmergencyStopped(self):
         self.fake.record("isEmergencyStopped")
         return False

@@ -20,6 +20,7 @@ class DriverStatus:
     moving: bool = False
     fault: str = ""
     protective_stop: bool = False
+    safety_mode: str = ""
 
 
 class RobotDriver(abc.ABC):

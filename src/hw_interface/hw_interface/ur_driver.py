@@ -23,6 +23,13 @@ from .protocol import Result
 from .robot_hw import DriverStatus, RobotDriver
 
 
+# UR safety modes as RTDEReceiveInterface.getSafetyMode() numbers them.
+SAFETY_MODES = {1: "normal", 2: "reduced", 3: "protective_stop", 4: "recovery", 5: "safeguard_stop",
+                6: "system_emergency_stop", 7: "robot_emergency_stop", 8: "violation", 9: "fault",
+                10: "validate_joint_id", 11: "undefined", 12: "automatic_mode_safeguard_stop",
+                13: "system_three_position_enabling_stop"}
+
+
 def _rtde_classes():
     """The real ur_rtde classes, imported only when a real connection is made."""
     import rtde_control
@@ -203,9 +210,11 @@ class URRtdeDriver(RobotDriver):
                 connected = self._control.isConnected() and self._receive.isConnected()
                 stopped = connected and (self._receive.isProtectiveStopped() or self._receive.isEmergencyStopped())
                 moving = connected and not self._control.isSteady()
+                safety = SAFETY_MODES.get(self._receive.getSafetyMode(), "unknown") if connected else ""
             except Exception as exc:
                 return DriverStatus(connected=False, fault=f"status read failed: {exc}")
-            return DriverStatus(connected=connected, moving=moving, fault=self._fault, protective_stop=stopped)
+            return DriverStatus(connected=connected, moving=moving, fault=self._fault, protective_stop=stopped,
+                                safety_mode=safety)
 
     # -- motion ----------------------------------------------------------------------------
     def set_joints(self, joints) -> None:
