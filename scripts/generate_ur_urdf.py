@@ -64,6 +64,9 @@ def _link(name, mass, d, a, radius):
     i_perp = mass * (3 * radius ** 2 + length ** 2) / 12
     ixx, iyy, izz = (i_axis, i_perp, i_perp) if rpy[1] else (i_perp, i_perp, i_axis)
     geom = f'<geometry><cylinder radius="{radius:.4g}" length="{length:.6g}"/></geometry>'
+    # Collision cylinders stop 1 cm short of each end, so the shoulder does not rub on a
+    # floor the base stands on (a phantom load on the joints in simulation).
+    collision_geom = f'<geometry><cylinder radius="{radius:.4g}" length="{max(length - 0.02, 0.01):.6g}"/></geometry>'
     return f"""  <link name="{name}">
     <inertial>
       <origin xyz="{_fmt(xyz)}" rpy="0 0 0"/>
@@ -77,7 +80,7 @@ def _link(name, mass, d, a, radius):
     </visual>
     <collision>
       <origin xyz="{_fmt(xyz)}" rpy="{_fmt(rpy)}"/>
-      {geom}
+      {collision_geom}
     </collision>
   </link>
 """

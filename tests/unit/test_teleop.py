@@ -8,7 +8,7 @@ from motion_commander.errors import MotionCommanderError
 from motion_commander.kinematics import RobotKinematics
 from motion_commander.safety import JointStepLimiter
 from motion_commander.teleop import AutoClutch, TeleopMapper
-from motion_commander.teleop_core import TeleopCore, TeleopStatus
+from motion_commander.teleop_core import Action, SafetyConfig, TeleopCore, TeleopStatus
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -72,9 +72,10 @@ def test_limiter_scales_the_whole_step_uniformly():
     assert command[0] == pytest.approx(limiter.max_dt)
 
 
-def make_core(steady=3, ratio=1.0):
+def make_core(steady=3, ratio=1.0, **safety):
     kin = RobotKinematics(UR5E)
-    return TeleopCore(kin, TeleopMapper(ratio), AutoClutch(steady, 0.2), JointStepLimiter(kin.velocity_limits, 1.0))
+    config = SafetyConfig(**{"joint_speed_scale": 1.0, "engage_ramp_s": 0.0, **safety})
+    return TeleopCore(kin, TeleopMapper(ratio), AutoClutch(steady, 0.2), config)
 
 
 def test_core_engages_without_a_jump_then_follows():
@@ -106,9 +107,9 @@ def test_core_rejects_bad_input_and_holds_on_unreachable_target():
 
 
 def test_core_disengages_when_the_hand_is_lost():
-    core = make_core(steady=1)
+    core = make_core(steady=1, stale_timeout_s=1.0)
     core.on_joint_state(HOME)
     core.on_hand_pose(1.0, [0, 0, 0.2], IDENTITY)
     assert core.mapper.engaged
-    assert core.on_hand_lost(1.5) and not core.mapper.engaged
+    assert core.tick(1.5) == Action.DISENGAGE and not core.mapper.engaged
     assert core.status == TeleopStatus.DISENGAGED

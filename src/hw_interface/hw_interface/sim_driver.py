@@ -318,6 +318,14 @@ class PybulletSimDriver(RobotDriver):
                 raise HwInterfaceError("another MoveJ/MoveL is running; wait or STOP it", Result.BUSY)
             return self._target.copy()
 
+    def _settled(self, since_end: float) -> bool:
+        """True once every joint is within 0.1 mrad of the path's end (or 1 s has passed):
+        a blocking move returns when the arm is there, as a real controller's does."""
+        if since_end >= 1.0:
+            return True
+        states = self._client.getJointStates(self._body, self._joint_indices)
+        return float(np.max(np.abs(np.array([s[0] for s in states]) - self._target))) < 1e-4
+
     def _run_path(self, path: JointPath, timeout: float) -> None:
         with self._lock:
             self._require_connection()
@@ -337,13 +345,13 @@ class PybulletSimDriver(RobotDriver):
                 if self._path is not None:
                     elapsed = self._sim_time - self._path_start
                     self._target = self._path.sample(elapsed)
-                    if elapsed >= self._path.duration:
+                    if elapsed >= self._path.duration and self._settled(elapsed - self._path.duration):
                         self._path = None
                         self._path_done.set()
                 self._client.setJointMotorControlArray(
                     self._body, self._joint_indices, pybullet.POSITION_CONTROL,
                     targetPositions=self._target.tolist(), forces=(self._efforts * 4.0).tolist(),
-                    positionGains=[0.6] * len(self._joint_indices))
+                    positionGains=[getattr(self, "_gain", 0.6)] * len(self._joint_indices))
                 self._client.stepSimulation()
                 self._sim_time += self.time_step
                 self.steps += 1

@@ -1,4 +1,5 @@
-"""Teleop mapping: hand motion since the clutch engaged, scaled, becomes tool motion.
+"""Teleop mapping and clutches: hand motion since the clutch engaged, scaled, becomes tool
+motion.
 
 At engage, the current hand pose and tool pose become the reference; afterwards the tool
 target is the reference tool pose moved by the hand's displacement (scaled by the speed
@@ -72,18 +73,25 @@ class AutoClutch:
 
     def __init__(self, steady_frames: int = 10, lost_after_s: float = 0.2):
         if steady_frames < 1 or not lost_after_s > 0:
-            raise MotionCommanderError("auto clutch needs steady_frames >= 1 and lost_after_s > 0")
+            raise MotionCommanderError("a clutch needs steady_frames >= 1 and lost_after_s > 0")
         self.steady_frames = steady_frames
         self.lost_after_s = lost_after_s
         self._count = 0
         self._last_stamp: Optional[float] = None
 
-    def on_frame(self, stamp: float) -> bool:
-        """Record a tracked frame; return whether the clutch is now engaged."""
+    def reset(self) -> None:
+        """Require a fresh run of steady frames before engaging again."""
+        self._count = 0
+
+    def _count_frame(self, stamp: float) -> None:
         if self._last_stamp is not None and stamp - self._last_stamp > self.lost_after_s:
             self._count = 0
         self._last_stamp = stamp
         self._count += 1
+
+    def on_frame(self, stamp: float, hands_num: int = 1) -> bool:
+        """Record a tracked frame; return whether the clutch is now engaged."""
+        self._count_frame(stamp)
         return self._count >= self.steady_frames
 
     def hand_lost(self, now: float) -> bool:
@@ -92,3 +100,49 @@ class AutoClutch:
             self._count = 0
             return True
         return False
+
+
+class GestureClutch(AutoClutch):
+    """Engaged while the operator shows a second hand (a dead-man gesture).
+
+    The primary hand steers; raising the other hand into view for ``steady_frames`` frames
+    engages, taking it away disengages at once, like letting go of a dead-man switch.
+    """
+
+    def on_frame(self, stamp: float, hands_num: int = 1) -> bool:
+        if hands_num < 2:
+            self._last_stamp = stamp
+            self._count = 0
+            return False
+        self._count_frame(stamp)
+        return self._count >= self.steady_frames
+
+
+class ButtonClutch(AutoClutch):
+    """Engaged while a button (/motion_commander/engage) is held and a hand is tracked."""
+
+    def __init__(self, steady_frames: int = 1, lost_after_s: float = 0.2):
+        super().__init__(steady_frames, lost_after_s)
+        self.pressed = False
+
+    def set_pressed(self, pressed: bool) -> None:
+        """Button state: True while held."""
+        self.pressed = bool(pressed)
+        if not pressed:
+            self._count = 0
+
+    def on_frame(self, stamp: float, hands_num: int = 1) -> bool:
+        self._count_frame(stamp)
+        return self.pressed and self._count >= self.steady_frames
+
+
+CLUTCHES = {"auto": AutoClutch, "gesture": GestureClutch, "button": ButtonClutch}
+
+
+def make_clutch(mode: str, steady_frames: int = 10, lost_after_s: float = 0.2):
+    """Clutch for engage mode ``auto``, ``gesture`` or ``button``."""
+    try:
+        cls = CLUTCHES[mode]
+    except KeyError:
+        raise MotionCommanderError(f"unknown engage mode {mode!r}; choose auto, gesture or button") from None
+    return cls(steady_frames if mode != "button" else 1, lost_after_s)

@@ -1,28 +1,62 @@
 """TeleopCore: from a filtered hand pose to a safe joint command (no ROS here).
 
-The node feeds it hand poses and the robot's measured joints; it answers with the joint
-target to stream, or with the status that explains why nothing is sent.
+The node feeds it hand poses, the robot's measured joints, the clutch button and the
+e-stop; it answers with the joint target to stream, or with the status that explains why
+nothing is sent. ``tick`` tells the node when to halt the robot (stale input).
 """
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
 
 from .kinematics import RobotKinematics, pose_to_se3
-from .safety import JointStepLimiter
+from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
+                     WorkspaceFence, condition_number)
 from .teleop import AutoClutch, TeleopMapper
 
 
 class TeleopStatus(enum.IntEnum):
-    """Status codes published on /motion_commander/status (data field)."""
+    """Status codes published on /motion_commander/status (std_msgs/UInt8 data)."""
 
-    WAITING_FOR_ROBOT = 0   # no /joint_states yet
-    DISENGAGED = 1          # clutch open: the robot holds still
-    ENGAGED = 2             # commands are streaming
-    JOINT_SPEED_LIMITED = 3  # engaged, this command was slowed to the joint speed limit
-    IK_FAILED = 4           # the target is unreachable: the robot holds its last command
-    BAD_INPUT = 5           # the hand pose was not finite / not a unit quaternion
+    WAITING_FOR_ROBOT = 0     # no /joint_states yet: nothing can be commanded
+    DISENGAGED = 1            # clutch open: the robot holds still
+    ENGAGED = 2               # commands are streaming at full allowed speed
+    JOINT_SPEED_LIMITED = 3   # engaged; this command was slowed to the joint velocity/acceleration limits
+    IK_FAILED = 4             # the target is unreachable: the robot holds its last command
+    BAD_INPUT = 5             # the hand pose was not finite / not a unit quaternion: ignored
+    STALE_INPUT_HALT = 6      # no fresh command within the stale timeout: the robot was halted
+    SINGULARITY_SLOWDOWN = 7  # near a singularity: motion toward it is slowed
+    SINGULARITY_HALT = 8      # at the singularity threshold: motion toward it is stopped
+    WORKSPACE_LIMIT = 9       # the target left the workspace fence (box/floor): clamped to it
+    JOINT_LIMIT_MARGIN = 10   # a joint target was clipped to its limit minus the margin
+    ESTOP = 11                # e-stop active: robot halted, teleop disengaged until released
+    RAMPING = 12              # just engaged or resumed: speed ramping up from zero
+
+
+class Action(enum.Enum):
+    """What tick() asks the node to do."""
+
+    NONE = 0
+    HALT = 1        # send STOP: stale input
+    DISENGAGE = 2   # hand lost: disengage (and hold)
+
+
+@dataclass
+class SafetyConfig:
+    """Safety parameters (units in the names)."""
+
+    joint_speed_scale: float = 0.5
+    joint_acceleration: Optional[float] = None   # rad/s^2
+    joint_limit_margin: float = 0.05             # rad
+    # UR5e: 8 at home, 40 with the wrist (q5) or elbow (q3) ~0.2 rad from straight.
+    singularity_slowdown: float = 40.0
+    singularity_halt: float = 80.0
+    workspace_lower: list = field(default_factory=lambda: [-1.5, -1.5, 0.0])   # m
+    workspace_upper: list = field(default_factory=lambda: [1.5, 1.5, 1.5])     # m
+    floor_z: float = 0.0                         # m
+    engage_ramp_s: float = 0.3
+    stale_timeout_s: float = 0.1
 
 
 @dataclass
@@ -33,68 +67,144 @@ class TeleopCommand:
     joints: np.ndarray
     target_position: np.ndarray
     target_orientation: np.ndarray
+    status: TeleopStatus = TeleopStatus.ENGAGED
 
 
 class TeleopCore:
-    """Clutch, mapping, IK and joint-step limiting for one robot."""
+    """Clutch, mapping, IK and the safety rules for one robot."""
 
     def __init__(self, kinematics: RobotKinematics, mapper: TeleopMapper, clutch: AutoClutch,
-                 limiter: JointStepLimiter):
+                 safety: SafetyConfig = None, limiter: JointStepLimiter = None):
         self.kinematics = kinematics
         self.mapper = mapper
         self.clutch = clutch
-        self.limiter = limiter
+        self.safety = safety or SafetyConfig()
+        s = self.safety
+        self.limiter = limiter or JointStepLimiter(kinematics.velocity_limits, s.joint_speed_scale,
+                                                   s.joint_acceleration)
+        self.margin = JointLimitMargin(kinematics.lower, kinematics.upper, s.joint_limit_margin)
+        self.singularity = SingularityGuard(s.singularity_slowdown, s.singularity_halt)
+        self.fence = WorkspaceFence(s.workspace_lower, s.workspace_upper, s.floor_z)
+        self.ramp = EngageRamp(s.engage_ramp_s)
+        self.watchdog = StaleCommandWatchdog(s.stale_timeout_s)
         self.status = TeleopStatus.WAITING_FOR_ROBOT
         self.measured_joints: Optional[np.ndarray] = None
+        self.estopped = False
         self._command: Optional[np.ndarray] = None
         self._command_stamp: Optional[float] = None
+        self._halted = False
 
+    # -- inputs ----------------------------------------------------------------------------
     def on_joint_state(self, joints) -> None:
-        """Record the robot's measured joints (used as the reference at engage)."""
+        """Record the robot's measured joints (the reference at engage and resume)."""
         self.measured_joints = np.asarray(joints, dtype=float)
         if self.status == TeleopStatus.WAITING_FOR_ROBOT:
             self.status = TeleopStatus.DISENGAGED
 
-    def on_hand_lost(self, now: float) -> bool:
-        """Disengage when the clutch reports the hand lost; return True if it did."""
-        if self.mapper.engaged and self.clutch.hand_lost(now):
+    def set_estop(self, active: bool) -> bool:
+        """Engage or release the e-stop; return True when the node must halt the robot."""
+        was = self.estopped
+        self.estopped = bool(active)
+        if self.estopped:
             self.disengage()
-            return True
+            self.status = TeleopStatus.ESTOP
+            return not was
+        if was:
+            self.clutch.reset()  # a release never re-engages by itself: a fresh engage is needed
+            self.status = TeleopStatus.DISENGAGED if self.measured_joints is not None else self.status
         return False
 
     def disengage(self) -> None:
         """Open the clutch: no more commands until the next engage; the robot holds."""
         self.mapper.disengage()
         self._command = None
-        if self.status != TeleopStatus.WAITING_FOR_ROBOT:
+        self.watchdog.clear()
+        if self.status not in (TeleopStatus.WAITING_FOR_ROBOT, TeleopStatus.ESTOP):
             self.status = TeleopStatus.DISENGAGED
 
-    def on_hand_pose(self, stamp: float, position, orientation) -> Optional[TeleopCommand]:
+    def tick(self, now: float) -> Action:
+        """Periodic check (>= 50 Hz): hand lost, or stale commands."""
+        if not self.mapper.engaged:
+            return Action.NONE
+        if self.clutch.hand_lost(now):
+            self.disengage()
+            return Action.DISENGAGE
+        if self.watchdog.expired(now):
+            self.watchdog.clear()
+            self._halted = True
+            self.status = TeleopStatus.STALE_INPUT_HALT
+            return Action.HALT
+        return Action.NONE
+
+    def on_hand_pose(self, stamp: float, position, orientation, hands_num: int = 1,
+                     now: Optional[float] = None) -> Optional[TeleopCommand]:
         """Process one filtered hand pose; return the command to send, if any."""
+        now = stamp if now is None else now
         position = np.asarray(position, dtype=float)
         orientation = np.asarray(orientation, dtype=float)
         if not (np.all(np.isfinite(position)) and np.all(np.isfinite(orientation))
                 and abs(np.linalg.norm(orientation) - 1.0) < 1e-3):
             self.status = TeleopStatus.BAD_INPUT
             return None
-        if self.measured_joints is None:
+        if self.measured_joints is None or self.estopped:
             return None
-        engaged_now = self.clutch.on_frame(stamp)
-        if not engaged_now:
+        if not self.clutch.on_frame(stamp, hands_num):
+            if self.mapper.engaged:
+                self.disengage()
             return None
         if not self.mapper.engaged:
             # Engage on the measured robot pose so the first target is where the robot is.
             tool_position, tool_orientation = self.kinematics.forward_pose(self.measured_joints)
             self.mapper.engage(position, orientation, tool_position, tool_orientation)
-            self._command = self.measured_joints.copy()
-            self._command_stamp = stamp
+            self._restart(stamp)
+        elif self._halted:
+            # Resume after a stale halt: the robot stopped where it was, start from there.
+            self._restart(stamp)
+        return self._command_for(stamp, now, position, orientation)
+
+    # -- internals -------------------------------------------------------------------------
+    def _restart(self, stamp: float) -> None:
+        self._command = self.measured_joints.copy()
+        self._command_stamp = stamp
+        self._halted = False
+        self.limiter.reset()
+        self.ramp.start(stamp)
+
+    def _command_for(self, stamp, now, position, orientation) -> Optional[TeleopCommand]:
+        flags = []
         target_position, target_orientation = self.mapper.target(position, orientation)
+        target_position, fenced = self.fence.clamp(target_position)
+        if fenced:
+            flags.append(TeleopStatus.WORKSPACE_LIMIT)
         result = self.kinematics.solve_ik(pose_to_se3(target_position, target_orientation), self._command)
         if not result.success:
             self.status = TeleopStatus.IK_FAILED
             return None
-        joints, limited = self.limiter.limit(self._command, result.joints, stamp - self._command_stamp)
+        joints, clipped = self.margin.apply(result.joints)
+        if clipped:
+            flags.append(TeleopStatus.JOINT_LIMIT_MARGIN)
+        fraction = self.ramp.fraction(stamp)
+        if fraction < 1.0:
+            flags.append(TeleopStatus.RAMPING)
+        singular = self.singularity.speed_fraction(condition_number(self.kinematics.jacobian(self._command)),
+                                                   condition_number(self.kinematics.jacobian(joints)))
+        if singular < 1.0:
+            flags.append(TeleopStatus.SINGULARITY_HALT if singular == 0.0 else TeleopStatus.SINGULARITY_SLOWDOWN)
+        joints, limited = self.limiter.limit(self._command, joints, stamp - self._command_stamp,
+                                             min(fraction, singular))
+        if limited and not flags:
+            flags.append(TeleopStatus.JOINT_SPEED_LIMITED)
         self._command = joints
         self._command_stamp = stamp
-        self.status = TeleopStatus.JOINT_SPEED_LIMITED if limited else TeleopStatus.ENGAGED
-        return TeleopCommand(stamp, joints, target_position, target_orientation)
+        self.watchdog.commanded(now)
+        # The most safety-relevant condition is the one reported.
+        self.status = max(flags, key=_severity) if flags else TeleopStatus.ENGAGED
+        return TeleopCommand(stamp, joints, target_position, target_orientation, self.status)
+
+
+_SEVERITY = [TeleopStatus.SINGULARITY_HALT, TeleopStatus.WORKSPACE_LIMIT, TeleopStatus.JOINT_LIMIT_MARGIN,
+             TeleopStatus.SINGULARITY_SLOWDOWN, TeleopStatus.RAMPING, TeleopStatus.JOINT_SPEED_LIMITED]
+
+
+def _severity(status: TeleopStatus) -> int:
+    return len(_SEVERITY) - _SEVERITY.index(status)

@@ -1,0 +1,147 @@
+"""Every teleop safety rule on its own, then inside TeleopCore."""
+import numpy as np
+import pytest
+
+from conftest import HOME, UR5E
+from motion_commander.errors import MotionCommanderError
+from motion_commander.kinematics import RobotKinematics
+from motion_commander.safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard,
+                                     StaleCommandWatchdog, WorkspaceFence, condition_number)
+from motion_commander.teleop import ButtonClutch, GestureClutch, TeleopMapper, make_clutch
+from motion_commander.teleop_core import Action, SafetyConfig, TeleopCore, TeleopStatus
+
+IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+
+
+def test_acceleration_limit_ramps_velocity():
+    limiter = JointStepLimiter([10.0], scale=1.0, acceleration_limit=2.0)
+    velocities, q = [], np.zeros(1)
+    for _ in range(5):
+        new, limited = limiter.limit(q, [1.0], dt=0.01)
+        velocities.append((new - q)[0] / 0.01)
+        q = new
+    np.testing.assert_allclose(velocities, [0.02, 0.04, 0.06, 0.08, 0.10], atol=1e-9)  # 2 rad/s^2
+    assert limited
+
+
+def test_speed_fraction_zero_means_no_motion():
+    limiter = JointStepLimiter([1.0, 1.0], scale=1.0)
+    command, limited = limiter.limit([0.0, 0.0], [0.1, 0.1], dt=0.01, speed_fraction=0.0)
+    np.testing.assert_allclose(command, [0.0, 0.0])
+    assert limited
+
+
+def test_joint_limit_margin_clips():
+    margin = JointLimitMargin([-1.0, -1.0], [1.0, 1.0], margin=0.1)
+    clipped, flag = margin.apply([0.95, -0.2])
+    np.testing.assert_allclose(clipped, [0.9, -0.2])
+    assert flag
+    with pytest.raises(MotionCommanderError):
+        JointLimitMargin([0.0], [0.1], margin=0.1)
+
+
+def test_singularity_guard_slows_then_halts_only_toward_it():
+    guard = SingularityGuard(10.0, 20.0)
+    assert guard.speed_fraction(5.0, 6.0) == 1.0
+    assert guard.speed_fraction(14.0, 15.0) == pytest.approx(0.5)
+    assert guard.speed_fraction(19.0, 25.0) == 0.0
+    assert guard.speed_fraction(25.0, 22.0) == 1.0  # backing out is never slowed
+
+
+def test_condition_number_rises_at_the_stretched_out_singularity():
+    kin = RobotKinematics(UR5E)
+    assert condition_number(kin.jacobian(HOME)) < 10  # 8.3
+    stretched = np.array([0.0, -np.pi / 2, 0.0, -np.pi / 2, -np.pi / 2, 0.0])  # elbow straight
+    assert condition_number(kin.jacobian(stretched)) > 1e3
+    wrist_straight = HOME * [1, 1, 1, 1, 0, 1]
+    assert condition_number(kin.jacobian(wrist_straight)) > 1e3
+
+
+def test_workspace_fence_and_floor():
+    fence = WorkspaceFence([-1, -1, -1], [1, 1, 1], floor_z=0.05)
+    assert fence.clamp([0.5, 0.5, 0.5])[1] is False
+    clamped, outside = fence.clamp([2.0, 0.0, -0.2])
+    np.testing.assert_allclose(clamped, [1.0, 0.0, 0.05])
+    assert outside
+
+
+def test_engage_ramp_and_watchdog():
+    ramp = EngageRamp(0.5)
+    ramp.start(10.0)
+    assert ramp.fraction(10.25) == pytest.approx(0.5) and ramp.fraction(11.0) == 1.0
+    assert ramp.fraction(10.0) > 0
+    watchdog = StaleCommandWatchdog(0.1)
+    assert not watchdog.expired(5.0)
+    watchdog.commanded(5.0)
+    assert not watchdog.expired(5.09) and watchdog.expired(5.11)
+
+
+def test_gesture_and_button_clutches():
+    gesture = GestureClutch(steady_frames=2)
+    assert [gesture.on_frame(t, n) for t, n in [(0, 1), (0.01, 2), (0.02, 2), (0.03, 1)]] == [False, False, True,
+                                                                                              False]
+    button = ButtonClutch()
+    assert not button.on_frame(0.0)
+    button.set_pressed(True)
+    assert button.on_frame(0.01)
+    button.set_pressed(False)
+    assert not button.on_frame(0.02)
+    with pytest.raises(MotionCommanderError):
+        make_clutch("telepathy")
+
+
+def make_core(**safety):
+    kin = RobotKinematics(UR5E)
+    config = SafetyConfig(**{"joint_speed_scale": 1.0, "engage_ramp_s": 0.0, **safety})
+    core = TeleopCore(kin, TeleopMapper(1.0), make_clutch("auto", 1), config)
+    core.on_joint_state(HOME)
+    return core
+
+
+def test_core_halts_on_stale_input_and_resumes_without_a_jump():
+    core = make_core(stale_timeout_s=0.1, engage_ramp_s=0.2)
+    hand = np.array([0.0, 0.0, 0.2])
+    for i in range(10):
+        core.on_hand_pose(0.01 * i, hand + [0.002 * i, 0, 0], IDENTITY)
+    assert core.tick(0.15) == Action.NONE  # last command at 0.09: 60 ms old
+    assert core.tick(0.2) == Action.HALT and core.status == TeleopStatus.STALE_INPUT_HALT
+    assert core.tick(0.21) == Action.NONE  # halts once
+    moved = HOME + 0.01  # where the robot actually stopped
+    core.on_joint_state(moved)
+    command = core.on_hand_pose(0.22, hand + [0.05, 0, 0], IDENTITY)  # hand moved meanwhile
+    assert np.max(np.abs(command.joints - moved)) < 0.01  # starts from where it stopped, ramping
+    assert command.status == TeleopStatus.RAMPING
+
+
+def test_core_fences_the_target():
+    core = make_core(workspace_lower=[-1, -1, 0.4], workspace_upper=[1, 1, 1])
+    tool, _ = core.kinematics.forward_pose(HOME)  # z = 0.488
+    for i in range(60):
+        command = core.on_hand_pose(0.01 * i, [0, 0, 0.2 - 0.005 * i], IDENTITY)
+    assert command.target_position[2] == pytest.approx(0.4)
+    assert core.status == TeleopStatus.WORKSPACE_LIMIT
+    reached, _ = core.kinematics.forward_pose(command.joints)
+    assert reached[2] >= 0.4 - 1e-3
+
+
+def test_core_estop_halts_and_needs_a_fresh_engage():
+    core = make_core()
+    core.on_hand_pose(0.0, [0, 0, 0.2], IDENTITY)
+    assert core.set_estop(True) and core.status == TeleopStatus.ESTOP
+    assert core.on_hand_pose(0.01, [0, 0, 0.2], IDENTITY) is None
+    assert not core.set_estop(True)  # already active: no second halt
+    core.set_estop(False)
+    assert core.status == TeleopStatus.DISENGAGED
+    assert core.on_hand_pose(0.02, [0, 0, 0.2], IDENTITY) is not None
+
+
+def test_no_joint_step_above_the_limits_at_engage():
+    core = make_core(joint_speed_scale=0.5, engage_ramp_s=0.3)
+    max_step = core.limiter.max_velocity
+    previous = HOME
+    for i in range(40):  # a hand already moving fast when teleop engages
+        command = core.on_hand_pose(0.01 * i, [0.01 * i, 0.0, 0.2], IDENTITY)
+        if command is None:
+            continue
+        assert np.all(np.abs(command.joints - previous) <= max_step * 0.01 + 1e-9)
+        previous = command.joints
