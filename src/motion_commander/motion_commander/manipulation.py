@@ -27,6 +27,7 @@ class ManipulationAPI:
         self.controller = controller
         self.approach_height = float(approach_height)
         self.last_error = ""
+        self.last_result = 0
 
     # -- the paper's three calls -------------------------------------------------------------
     def motion_setPose(self, pose) -> bool:  # noqa: N802 - the paper's name
@@ -39,8 +40,10 @@ class ManipulationAPI:
             if not hasattr(exc, "result"):
                 raise
             self.last_error = str(exc)
+            self.last_result = int(exc.result)
             return False
         self.last_error = ""
+        self.last_result = 0
         return True
 
     def info_getPose(self):  # noqa: N802 - the paper's name
