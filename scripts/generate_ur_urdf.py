@@ -1,10 +1,13 @@
 #!/usr/bin/env python3
-"""Write the simplified UR5e / UR10e URDF models shipped in src/motion_commander/urdf.
+"""Write the simplified robot models shipped in src/motion_commander/urdf: UR5e, UR10e and
+the Staubli TX90 of the paper.
 
-The kinematics are Universal Robots' published DH parameters, so forward kinematics match
-the real controllers' (base frame = UR's DH base frame, tool0 = the flange). Geometry is
-cylinders and masses are UR's published link masses, which is all the pybullet simulation
-and the pinocchio kinematics need. Run with any python3:
+The kinematics are the manufacturers' standard DH parameters (Universal Robots publish
+theirs; the TX90's are its data-sheet link lengths), so forward kinematics match the
+controllers' up to calibration (base frame = the DH base frame, tool0 = the flange).
+Geometry is cylinders and masses are the published (UR) or estimated (TX90) link masses,
+which is all the pybullet simulation and the pinocchio kinematics need. Run with any
+python3:
     python3 scripts/generate_ur_urdf.py
 """
 import math
@@ -30,6 +33,23 @@ ROBOTS = {
         velocity=[2.0944, 2.0944, 3.1416, 3.1416, 3.1416, 3.1416],
         radius=0.06,
     ),
+    # Staubli TX90: 478 mm shoulder height, 50 mm shoulder offset, 425 mm upper arm, 50 mm
+    # elbow offset, 425 mm forearm, 100 mm to the flange (1000 mm reach). Zero pose upright,
+    # hence the theta offsets on joints 2 and 3.
+    "tx90": dict(
+        d=[0.478, 0.0, 0.05, 0.425, 0.0, 0.1],
+        a=[0.05, 0.425, 0.0, 0.0, 0.0, 0.0],
+        alpha=[-math.pi / 2, 0.0, math.pi / 2, -math.pi / 2, math.pi / 2, 0.0],
+        offset=[0.0, -math.pi / 2, math.pi / 2, 0.0, 0.0, 0.0],
+        mass=[30.0, 25.0, 12.0, 8.0, 3.0, 1.0],
+        effort=[320.0, 320.0, 160.0, 50.0, 50.0, 30.0],
+        velocity=[math.radians(v) for v in (400, 400, 430, 540, 475, 760)],
+        lower=[math.radians(v) for v in (-180, -130, -145, -270, -115, -270)],
+        upper=[math.radians(v) for v in (180, 147.5, 145, 270, 140, 270)],
+        radius=0.07,
+        joints=["joint_1", "joint_2", "joint_3", "joint_4", "joint_5", "joint_6"],
+        links=["link_1", "link_2", "link_3", "link_4", "link_5", "link_6"],
+    ),
 }
 JOINTS = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
           "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
@@ -44,25 +64,29 @@ _TINY_INERTIAL = ('    <inertial><mass value="0.001"/>'
                   '<inertia ixx="1e-6" ixy="0" ixz="0" iyy="1e-6" iyz="0" izz="1e-6"/></inertial>\n')
 
 
-def _segment_geometry(d, a, radius):
-    """Return (origin xyz, rpy, length) of a cylinder spanning the fixed DH offset."""
-    if abs(a) > abs(d):
-        return (a / 2, 0.0, 0.0), (0.0, math.pi / 2, 0.0), abs(a)
-    length = max(abs(d), 2 * radius)
-    return (0.0, 0.0, d / 2), (0.0, 0.0, 0.0), length
+def _segment_geometry(vector, radius):
+    """Return (origin xyz, rpy, length) of a cylinder from the link origin to ``vector``."""
+    x, y, z = vector
+    length = math.sqrt(x * x + y * y + z * z)
+    if length < 2 * radius:  # a joint with no offset: a short drum around its axis
+        return (0.0, 0.0, z / 2), (0.0, 0.0, 0.0), 2 * radius
+    # Rz(yaw) Ry(pitch) turns the cylinder's z axis onto the segment.
+    pitch, yaw = math.atan2(math.hypot(x, y), z), math.atan2(y, x)
+    return (x / 2, y / 2, z / 2), (0.0, pitch, yaw), length
 
 
 def _fmt(values):
     return " ".join(f"{v:.12g}" for v in values)
 
 
-def _link(name, mass, d, a, radius):
-    xyz, rpy, length = _segment_geometry(d, a, radius)
+def _link(name, mass, vector, radius):
+    xyz, rpy, length = _segment_geometry(vector, radius)
     # Solid cylinder inertia about its centre, expressed along its own axis; good enough
     # for a position-controlled simulation.
     i_axis = 0.5 * mass * radius ** 2
     i_perp = mass * (3 * radius ** 2 + length ** 2) / 12
-    ixx, iyy, izz = (i_axis, i_perp, i_perp) if rpy[1] else (i_perp, i_perp, i_axis)
+    # Inertia as if the cylinder were along z: a rough but positive-definite estimate.
+    ixx, iyy, izz = i_perp, i_perp, i_axis
     geom = f'<geometry><cylinder radius="{radius:.4g}" length="{length:.6g}"/></geometry>'
     # Collision cylinders stop 1 cm short of each end, so the shoulder does not rub on a
     # floor the base stands on (a phantom load on the joints in simulation).
@@ -95,24 +119,32 @@ def generate(name, p):
            '  <joint name="world_joint" type="fixed">\n'
            '    <parent link="world"/><child link="base_link"/>\n'
            '    <origin xyz="0 0 0" rpy="0 0 0"/>\n  </joint>\n',
-           _link("base_link", 4.0, 0.05, 0.0, p["radius"] * 1.3)]
+           _link("base_link", 4.0, (0.0, 0.0, 0.05), p["radius"] * 1.3)]
     parent, origin_xyz, origin_rpy = "base_link", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
-    for i, (joint, link) in enumerate(zip(JOINTS, LINKS)):
+    offsets = p.get("offset", [0.0] * 6)
+    lower = p.get("lower", [-v for v in LIMITS])
+    upper = p.get("upper", LIMITS)
+    for i, (joint, link) in enumerate(zip(p.get("joints", JOINTS), p.get("links", LINKS))):
         out.append(f"""  <joint name="{joint}" type="revolute">
     <parent link="{parent}"/><child link="{link}"/>
     <origin xyz="{_fmt(origin_xyz)}" rpy="{_fmt(origin_rpy)}"/>
     <axis xyz="0 0 1"/>
-    <limit lower="{-LIMITS[i]:.6f}" upper="{LIMITS[i]:.6f}" effort="{p['effort'][i]}" velocity="{p['velocity'][i]}"/>
+    <limit lower="{lower[i]:.6f}" upper="{upper[i]:.6f}" effort="{p['effort'][i]}" velocity="{p['velocity'][i]:.6f}"/>
     <dynamics damping="0.5" friction="0.0"/>
   </joint>
 """)
-        out.append(_link(link, p["mass"][i], p["d"][i], p["a"][i], p["radius"] * (1.0 if i < 3 else 0.8)))
+        # Standard DH: after joint i turns, the fixed part of the step is
+        # Rz(offset_i) Tz(d_i) Tx(a_i) Rx(alpha_i), which becomes the next joint's origin
+        # (URDF rpy (alpha, 0, offset) is exactly Rz(offset) Rx(alpha)).
+        off = offsets[i]
+        vector = (p["a"][i] * math.cos(off), p["a"][i] * math.sin(off), p["d"][i])
+        out.append(_link(link, p["mass"][i], vector, p["radius"] * (1.0 if i < 3 else 0.8)))
         parent = link
-        # Standard DH: the fixed part of each step is Tz(d) Tx(a) Rx(alpha).
-        origin_xyz, origin_rpy = (p["a"][i], 0.0, p["d"][i]), (p["alpha"][i], 0.0, 0.0)
+        origin_xyz = vector
+        origin_rpy = (p["alpha"][i], 0.0, off)
     out.append(f"""  <link name="tool0">\n{_TINY_INERTIAL}  </link>
-  <joint name="wrist_3_link-tool0_fixed_joint" type="fixed">
-    <parent link="wrist_3_link"/><child link="tool0"/>
+  <joint name="{parent}-tool0_fixed_joint" type="fixed">
+    <parent link="{parent}"/><child link="tool0"/>
     <origin xyz="{_fmt(origin_xyz)}" rpy="{_fmt(origin_rpy)}"/>
   </joint>
 </robot>

@@ -89,3 +89,18 @@ def test_plugin_driver_is_found_through_its_entry_point(tmp_path, monkeypatch):
     driver = create_driver("my_robot", urdf_path=UR5E, real_time=False)
     assert type(driver).__name__ == "MyDriver"
     sys.modules.pop("my_robot_driver", None)
+
+
+@pytest.mark.parametrize("robot, home", [("ur10e", HOME), ("tx90", [0.0, 0.4, 1.6, 0.0, 1.14, 0.0])])
+def test_sim_runs_every_shipped_robot(robot, home):
+    sim = PybulletSimDriver(UR5E.replace("ur5e", robot), initial_joints=home, real_time=False)
+    sim.login()
+    try:
+        assert sim.get_robots() == [(robot, 6)]
+        position, orientation = sim.get_robot_cartesian_position()
+        expected, _ = sim.kinematics.forward_pose(home)
+        np.testing.assert_allclose(position, expected, atol=2e-3)  # pybullet and pinocchio agree
+        sim.move_l(position + [0.05, 0.05, -0.05], orientation)
+        np.testing.assert_allclose(sim.get_robot_cartesian_position()[0], position + [0.05, 0.05, -0.05], atol=2e-3)
+    finally:
+        sim.disconnect()

@@ -71,3 +71,26 @@ def test_bad_model_inputs_are_explained(tmp_path):
         RobotKinematics(str(tmp_path / "none.urdf"))
     with pytest.raises(MotionCommanderError, match="no frame"):
         RobotKinematics(UR5E, tool_frame="gripper_tip")
+
+
+TX90 = UR5E.replace("ur5e", "tx90")
+
+
+def test_tx90_zero_pose_is_upright_with_its_offsets():
+    kin = RobotKinematics(TX90)
+    position, _ = kin.forward_pose(np.zeros(6))
+    # 50 mm shoulder offset, 50 mm elbow offset, 478 + 425 + 425 + 100 mm tall.
+    np.testing.assert_allclose(position, [0.05, 0.05, 1.428], atol=1e-9)
+    assert kin.joint_names == [f"joint_{i}" for i in range(1, 7)]
+
+
+@pytest.mark.parametrize("urdf, home", [
+    (UR10E, HOME),
+    (TX90, np.array([0.0, 0.4, 1.6, 0.0, 1.14, 0.0])),
+])
+def test_ik_round_trip_on_every_shipped_robot(urdf, home, rng):
+    kin = RobotKinematics(urdf)
+    for _ in range(30):
+        goal = home + rng.uniform(-0.3, 0.3, 6)
+        result = kin.solve_ik(kin.forward(goal), goal + rng.uniform(-0.05, 0.05, 6))
+        assert result.success and kin.within_limits(result.joints)

@@ -47,6 +47,17 @@ class JointStepLimiter:
         """Start from rest (after engage, resume or a halt)."""
         self._velocity = None
 
+    def overshoot(self, previous, target, dt: float, speed_fraction: float = 1.0) -> float:
+        """How many times too large the step to ``target`` is for the velocity limit
+        (<= 1: allowed as is). No side effect."""
+        dt = float(np.clip(dt, self.min_dt, self.max_dt))
+        step = np.abs(np.asarray(target, dtype=float) - np.asarray(previous, dtype=float))
+        max_step = self.max_velocity * dt * max(speed_fraction, 0.0)
+        if np.any((max_step <= 0) & (step > 0)):
+            return float("inf")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return float(np.max(np.where(max_step > 0, step / max_step, 0.0)))
+
     def limit(self, previous, target, dt: float, speed_fraction: float = 1.0):
         """Return (command, limited): previous moved toward target within the limits.
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
 
 from .kinematics import RobotKinematics, pose_to_se3
 from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
@@ -170,6 +171,15 @@ class TeleopCore:
         self.limiter.reset()
         self.ramp.start(stamp)
 
+    def _partial_step(self, target_position, target_orientation, fraction, fallback):
+        """Joints reaching ``fraction`` of the way from the commanded tool pose to the target."""
+        start_position, start_orientation = self.kinematics.forward_pose(self._command)
+        rotations = Rotation.from_quat([start_orientation, target_orientation])
+        orientation = Slerp([0.0, 1.0], rotations)([fraction])[0].as_quat()
+        position = start_position + fraction * (np.asarray(target_position) - start_position)
+        result = self.kinematics.solve_ik(pose_to_se3(position, orientation), self._command)
+        return self.margin.apply(result.joints)[0] if result.success else fallback
+
     def _command_for(self, stamp, now, position, orientation) -> Optional[TeleopCommand]:
         flags = []
         target_position, target_orientation = self.mapper.target(position, orientation)
@@ -190,8 +200,15 @@ class TeleopCore:
                                                    condition_number(self.kinematics.jacobian(joints)))
         if singular < 1.0:
             flags.append(TeleopStatus.SINGULARITY_HALT if singular == 0.0 else TeleopStatus.SINGULARITY_SLOWDOWN)
-        joints, limited = self.limiter.limit(self._command, joints, stamp - self._command_stamp,
-                                             min(fraction, singular))
+        speed = min(fraction, singular)
+        dt = stamp - self._command_stamp
+        overshoot = self.limiter.overshoot(self._command, joints, dt, speed)
+        if 1.0 < overshoot < float("inf"):
+            # Too far for one step: aim at the point 1/overshoot of the way along the
+            # Cartesian path instead of cutting straight through joint space, which can
+            # swing the tool far off the path when the IK solution moved a lot.
+            joints = self._partial_step(target_position, target_orientation, 1.0 / overshoot, joints)
+        joints, limited = self.limiter.limit(self._command, joints, dt, speed)
         if limited and not flags:
             flags.append(TeleopStatus.JOINT_SPEED_LIMITED)
         self._command = joints
