@@ -21,6 +21,24 @@ def se3_to_pose(transform: pin.SE3):
     return np.array(xyzquat[:3]), np.array(xyzquat[3:])
 
 
+def quat_to_matrix(quaternion) -> np.ndarray:
+    """3x3 rotation matrix of a quaternion (x, y, z, w); normalised first."""
+    q = np.asarray(quaternion, dtype=float)
+    return pin.Quaternion(q / np.linalg.norm(q)).matrix()
+
+
+def matrix_to_quat(matrix) -> np.ndarray:
+    """Quaternion (x, y, z, w) of a 3x3 rotation matrix."""
+    return np.array(pin.Quaternion(np.asarray(matrix, dtype=float)).coeffs())
+
+
+def slerp(q0, q1, fraction: float) -> np.ndarray:
+    """Spherical interpolation between quaternions (x, y, z, w), shortest way."""
+    a = pin.Quaternion(np.asarray(q0, dtype=float))
+    b = pin.Quaternion(np.asarray(q1, dtype=float))
+    return np.array(a.slerp(float(fraction), b).coeffs())
+
+
 @dataclass
 class IkResult:
     """Outcome of an IK solve: joints, whether the tolerance was met, residual error."""

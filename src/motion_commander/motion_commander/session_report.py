@@ -23,6 +23,7 @@ class SessionData:
     targets: List[tuple] = field(default_factory=list)
     tools: List[tuple] = field(default_factory=list)
     latencies: List[float] = field(default_factory=list)
+    stage_latencies: List[tuple] = field(default_factory=list)  # (sequencer, core, driver) s
 
 
 def tracking_errors(targets: np.ndarray, tools: np.ndarray) -> np.ndarray:
@@ -72,7 +73,18 @@ def summarize(data: SessionData) -> dict:
         "latency_p50_ms": pct(latencies, 50),
         "latency_p99_ms": pct(latencies, 99),
         "latency_samples": int(len(latencies)),
+        "stage_latency_ms": _stage_figures(data.stage_latencies),
     }
+
+
+def _stage_figures(rows):
+    """p50/p99 (ms) of each stage's cumulative latency from the sensor stamp."""
+    stages = np.asarray(rows, dtype=float).reshape(-1, 3) * 1000.0
+    if not len(stages):
+        return {}
+    return {name: {"p50": round(float(np.percentile(stages[:, i], 50)), 3),
+                   "p99": round(float(np.percentile(stages[:, i], 99)), 3)}
+            for i, name in enumerate(("sequencer", "core", "driver"))}
 
 
 def format_summary(summary: dict, plot_path: str = "") -> str:
@@ -93,6 +105,8 @@ def format_summary(summary: dict, plot_path: str = "") -> str:
         f"latency sensor->driver p50 / p99 : {show(summary['latency_p50_ms'], 'ms')} / "
         f"{show(summary['latency_p99_ms'], 'ms')} ({summary['latency_samples']} commands)",
     ]
+    for stage, figures in summary.get("stage_latency_ms", {}).items():
+        lines.append(f"  sensor->{stage:<9} p50 / p99 : {figures['p50']} ms / {figures['p99']} ms")
     if plot_path:
         lines.append(f"plot                     : {plot_path}")
     return "\n".join(lines)

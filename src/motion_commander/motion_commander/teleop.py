@@ -9,9 +9,9 @@ current tool pose, engaging never makes the robot jump.
 from typing import Optional
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from .errors import MotionCommanderError
+from .kinematics import matrix_to_quat, quat_to_matrix
 
 
 class TeleopMapper:
@@ -28,7 +28,9 @@ class TeleopMapper:
         if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6):
             raise MotionCommanderError("hand_to_robot must be a 3x3 rotation matrix")
         self.speed_ratio = float(speed_ratio)
-        self.hand_to_robot = Rotation.from_matrix(rotation)
+        # Rotation matrices, not scipy Rotation objects: this runs on every frame and
+        # matrix products cost a microsecond where Rotation objects cost tens.
+        self.hand_to_robot = rotation
         self.follow_orientation = follow_orientation
         self._hand_ref = None
         self._tool_ref = None
@@ -40,8 +42,8 @@ class TeleopMapper:
 
     def engage(self, hand_position, hand_orientation, tool_position, tool_orientation) -> None:
         """Take the current hand and tool poses as the reference of relative motion."""
-        self._hand_ref = (np.array(hand_position, dtype=float), Rotation.from_quat(hand_orientation))
-        self._tool_ref = (np.array(tool_position, dtype=float), Rotation.from_quat(tool_orientation))
+        self._hand_ref = (np.array(hand_position, dtype=float), quat_to_matrix(hand_orientation))
+        self._tool_ref = (np.array(tool_position, dtype=float), quat_to_matrix(tool_orientation))
 
     def disengage(self) -> None:
         """Drop the reference; target() is unavailable until the next engage()."""
@@ -54,15 +56,15 @@ class TeleopMapper:
             raise MotionCommanderError("teleop is not engaged; call engage() first")
         hand_p0, hand_r0 = self._hand_ref
         tool_p0, tool_r0 = self._tool_ref
-        displacement = self.hand_to_robot.apply(np.asarray(hand_position, dtype=float) - hand_p0)
+        displacement = self.hand_to_robot @ (np.asarray(hand_position, dtype=float) - hand_p0)
         position = tool_p0 + self.speed_ratio * displacement
         if not self.follow_orientation:
-            return position, tool_r0.as_quat()
+            return position, matrix_to_quat(tool_r0)
         # The hand's rotation since engage, re-expressed in the robot base frame, is applied
         # to the tool in the base frame, so turning the hand turns the tool the same way.
-        delta = Rotation.from_quat(hand_orientation) * hand_r0.inv()
-        delta_robot = self.hand_to_robot * delta * self.hand_to_robot.inv()
-        return position, (delta_robot * tool_r0).as_quat()
+        delta = quat_to_matrix(hand_orientation) @ hand_r0.T
+        delta_robot = self.hand_to_robot @ delta @ self.hand_to_robot.T
+        return position, matrix_to_quat(delta_robot @ tool_r0)
 
 
 class AutoClutch:

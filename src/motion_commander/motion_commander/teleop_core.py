@@ -9,9 +9,8 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
-from .kinematics import RobotKinematics, pose_to_se3
+from .kinematics import RobotKinematics, pose_to_se3, slerp
 from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
                      WorkspaceFence, condition_number)
 from .teleop import AutoClutch, TeleopMapper
@@ -174,8 +173,7 @@ class TeleopCore:
     def _partial_step(self, target_position, target_orientation, fraction, fallback):
         """Joints reaching ``fraction`` of the way from the commanded tool pose to the target."""
         start_position, start_orientation = self.kinematics.forward_pose(self._command)
-        rotations = Rotation.from_quat([start_orientation, target_orientation])
-        orientation = Slerp([0.0, 1.0], rotations)([fraction])[0].as_quat()
+        orientation = slerp(start_orientation, target_orientation, fraction)
         position = start_position + fraction * (np.asarray(target_position) - start_position)
         result = self.kinematics.solve_ik(pose_to_se3(position, orientation), self._command)
         return self.margin.apply(result.joints)[0] if result.success else fallback
