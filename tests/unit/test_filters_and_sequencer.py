@@ -54,8 +54,13 @@ def test_unknown_filter_and_bad_queue_are_explained():
         make_filter("mean", queue_size=0)
 
 
+def plain(**kw):
+    """A sequencer with no trimming, so single frames pass straight through."""
+    return Sequencer(SequencerConfig(entry_trim_frames=0, **kw))
+
+
 def test_sequencer_passes_good_frames_and_counts():
-    seq = Sequencer()
+    seq = plain()
     out = seq.process(sample(10.0), now=10.01)
     assert out is not None and out.stamp == 10.0
     assert seq.counters["frames_out"] == 1 and seq.dropped == 0
@@ -68,13 +73,13 @@ def test_sequencer_passes_good_frames_and_counts():
     (dict(hands_num=2), "hands_num_mismatch"),
 ])
 def test_sequencer_drops_bad_frames(bad, reason):
-    seq = Sequencer()
+    seq = plain()
     assert seq.process(sample(10.0, **bad), now=10.0) is None
     assert seq.counters["dropped_" + reason] == 1
 
 
 def test_sequencer_drops_stale_duplicate_out_of_order_and_future():
-    seq = Sequencer(SequencerConfig(max_age_s=0.1))
+    seq = plain(max_age_s=0.1)
     assert seq.process(sample(10.0), now=10.2) is None            # older than max age
     assert seq.process(sample(10.0), now=10.01) is not None
     assert seq.process(sample(10.0), now=10.02) is None           # duplicate
@@ -89,7 +94,7 @@ def test_sequencer_drops_stale_duplicate_out_of_order_and_future():
 
 
 def test_new_hand_reseeds_the_filter_instead_of_blending():
-    seq = Sequencer()
+    seq = plain()
     for i in range(5):
         seq.process(sample(10.0 + 0.01 * i, position=(0.0, 0.0, 0.2), hand_id=1), now=10.1)
     out = seq.process(sample(10.1, position=(0.1, 0.0, 0.2), hand_id=2), now=10.1)
@@ -107,3 +112,121 @@ def test_frame_without_hand_is_counted_not_an_error():
 def test_bad_config_is_refused():
     with pytest.raises(MotionSensorError, match="max_age_s"):
         SequencerConfig(max_age_s=0)
+
+
+def stream(seq, positions, start=10.0, dt=0.01, **kw):
+    """Feed positions at a fixed rate; return the outputs (None for dropped frames)."""
+    return [seq.process(sample(start + i * dt, position=p, **kw), now=start + i * dt) for i, p in enumerate(positions)]
+
+
+def test_entry_trim_drops_the_first_frames_of_a_hand():
+    seq = Sequencer(SequencerConfig(entry_trim_frames=3))
+    out = stream(seq, [(0, 0, 0.2)] * 5)
+    assert [o is None for o in out] == [True, True, True, False, False]
+    assert seq.counters["dropped_entry_trim"] == 3
+    # The hand leaves (a gap longer than hand_lost_s) and comes back: trimmed again.
+    again = stream(seq, [(0, 0, 0.2)] * 4, start=11.0)
+    assert [o is None for o in again] == [True, True, True, False]
+
+
+def test_exit_trim_discards_the_last_frames_before_the_hand_leaves():
+    seq = Sequencer(SequencerConfig(entry_trim_frames=0, exit_trim_frames=2))
+    out = stream(seq, [(0.001 * i, 0, 0.2) for i in range(5)])
+    assert [o is None for o in out] == [True, True, False, False, False]
+    assert out[2].position[0] == pytest.approx(0.0)  # delayed by two frames
+    empty = HandSample(stamp=10.06, position=np.zeros(3), orientation=np.zeros(4), hands_num=0, hand_types=())
+    seq.process(empty, now=10.06)
+    assert seq.counters["dropped_exit_trim"] == 2
+
+
+def test_a_single_jump_is_ignored():
+    seq = plain(filter_name="one_euro")
+    path = [(0.001 * i, 0, 0.2) for i in range(10)]
+    path[5] = (0.3, 0.0, 0.2)  # a 30 cm glitch in one frame
+    out = stream(seq, path)
+    assert out[5] is None and seq.counters["dropped_jump"] == 1
+    assert max(np.linalg.norm(o.position - np.array([0.005, 0, 0.2])) for o in out if o is not None) < 0.01
+
+
+def test_a_real_fast_move_is_accepted_without_an_output_jump():
+    seq = plain(jump_accept_after=3)
+    path = [(0.0, 0, 0.2)] * 10 + [(0.2, 0, 0.2)] * 10  # the hand really is elsewhere now
+    out = [o for o in stream(seq, path) if o is not None]
+    steps = [np.linalg.norm(b.position - a.position) for a, b in zip(out, out[1:])]
+    assert seq.counters["jumps_accepted"] == 1 and seq.counters["dropped_jump"] == 2
+    assert max(steps) < 1e-9  # the output continues from where it was
+
+
+def test_highest_priority_device_drives_and_switching_does_not_jump():
+    seq = plain(device_priorities={"leap": 2, "spacemouse": 1}, device_timeout_s=0.05)
+    t = 10.0
+    outputs = []
+    for i in range(10):  # both devices publish; only the leap drives
+        t += 0.01
+        outputs.append(seq.process(sample(t, position=(0.1, 0, 0.2), device="leap"), now=t))
+        assert seq.process(sample(t + 0.001, position=(0.5, 0, 0.2), device="spacemouse"), now=t + 0.001) is None
+    assert seq.active_device == "leap" and seq.counters["dropped_inactive_device"] == 10
+    for i in range(10):  # the leap goes quiet: the spacemouse takes over, from where the output was
+        t += 0.01
+        out = seq.process(sample(t, position=(0.5 + 0.001 * i, 0, 0.2), device="spacemouse"), now=t)
+        if out is not None:
+            outputs.append(out)
+    assert seq.active_device == "spacemouse" and seq.counters["device_switches"] == 1
+    steps = [np.linalg.norm(b.position - a.position) for a, b in zip(outputs, outputs[1:])]
+    assert max(steps) < 0.002
+
+
+def test_forced_device_and_frames_older_than_the_last_command():
+    seq = plain(active_device="spacemouse")
+    assert seq.process(sample(10.0, device="leap"), now=10.0) is None
+    assert seq.process(sample(10.0, device="spacemouse"), now=10.0) is not None
+    seq.note_command(10.05)
+    assert seq.process(sample(10.04, device="spacemouse"), now=10.06) is None
+    assert seq.counters["dropped_older_than_command"] == 1
+
+
+@pytest.mark.parametrize("name", ["mean", "one_euro", "kalman"])
+def test_every_filter_outputs_unit_quaternions_and_follows_a_ramp(name, rng):
+    f = make_filter(name)
+    base = Rotation.from_euler("z", 0.3)
+    for i in range(200):
+        noisy = (base * Rotation.from_rotvec(rng.normal(0, 0.01, 3))).as_quat()
+        position, orientation = f.update(10.0 + 0.01 * i, np.array([0.002 * i, 0.0, 0.2]), noisy)
+        assert np.linalg.norm(orientation) == pytest.approx(1.0)
+        assert np.all(np.isfinite(position))
+    assert abs(position[0] - 0.398) < 0.012  # following a 0.2 m/s ramp within ~6 frames of lag
+    assert (Rotation.from_quat(orientation) * base.inv()).magnitude() < 0.02
+
+
+def test_one_euro_rate_comes_from_stamps():
+    """The same motion sampled at 50 and 200 Hz gives nearly the same output at the same
+    instants; a filter that assumed a fixed 110 Hz rate would not."""
+    def run(rate, assumed_rate=None):
+        f = make_filter("one_euro")
+        out = {}
+        for k, t in enumerate(np.arange(0, 1.0, 1.0 / rate)):
+            stamp = 10.0 + (k / assumed_rate if assumed_rate else t)
+            p, _ = f.update(stamp, np.array([0.1 * np.sin(3 * t), 0.0, 0.2]), IDENTITY)
+            out[round(t, 6)] = p[0]
+        return out
+
+    def gap(a, b):
+        return max(abs(a[t] - b[t]) for t in a if t in b and t > 0.2)
+
+    stamped = gap(run(50), run(200))
+    fixed_rate = gap(run(50, assumed_rate=110), run(200, assumed_rate=110))
+    assert stamped < 0.01 and stamped < fixed_rate / 2
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(0.0, 0.6),
+                          st.floats(0.001, 0.05)), min_size=1, max_size=60),
+       st.sampled_from(["mean", "one_euro", "kalman"]))
+def test_sequencer_output_is_always_finite_and_unit(steps, name):
+    seq = Sequencer(SequencerConfig(filter_name=name, entry_trim_frames=2))
+    t = 10.0
+    for x, y, z, dt in steps:
+        t += dt
+        out = seq.process(sample(t, position=(x, y, z)), now=t)
+        if out is not None:
+            assert np.all(np.isfinite(out.position)) and np.linalg.norm(out.orientation) == pytest.approx(1.0)

@@ -1,12 +1,24 @@
 """The sequencer: turns irregular, noisy device frames into a clean pose stream.
 
-It validates each frame, drops stale and out-of-order ones (the latest frame wins, so no
-queue builds up between the asynchronous reading and commanding), re-seeds the filter when
-a different hand appears, and filters the pose. Every rejected frame is counted by reason.
+Stages, in order, each counting what it drops (``counters``, by reason):
+1. validation: finite values, unit quaternion, hands_num consistent with hand_type, stamp;
+2. device binding: with several devices publishing, only the active one drives
+   (forced by name, else the highest priority device heard within ``device_timeout_s``);
+3. timing: duplicate, out-of-order, future, too old (``max_age_s``) or older than the
+   robot's last accepted command (the latest frame wins: no queue builds up);
+4. hand identity: a different hand (id or type) re-seeds the filter; two hands are never
+   blended; a hand that (re)enters has its first ``entry_trim_frames`` frames trimmed;
+5. jump rejection: a change larger than ``jump_distance_m`` / ``jump_angle_rad`` within
+   ``jump_window_s`` is ignored, unless ``jump_accept_after`` frames in a row agree on the
+   new place (then it is a real move and is accepted without an output jump);
+6. exit trim: the last ``exit_trim_frames`` frames before a hand leaves are held back and
+   discarded when it leaves (a delay of that many frames; 0 turns it off);
+7. filtering (mean, kalman or one_euro), then a continuity offset so that device switches
+   and accepted jumps never make the output jump.
 """
-from collections import Counter
-from dataclasses import dataclass
-from typing import Optional
+from collections import Counter, deque
+from dataclasses import dataclass, field
+from typing import Dict, Optional
 
 import numpy as np
 
@@ -14,8 +26,8 @@ from .errors import MotionSensorError
 from .filters import make_filter
 from .hand_sample import HandSample
 
-# Quaternions from drivers are normalised in float64; messages carry float64 too, so
-# anything further than this from unit norm was not produced as a rotation.
+# Quaternions from drivers are normalised in float64; anything further than this from
+# unit norm was not produced as a rotation.
 UNIT_QUATERNION_TOLERANCE = 1e-3
 
 
@@ -27,14 +39,29 @@ class SequencerConfig:
     filter_params: dict = None
     max_age_s: float = 0.25
     max_future_s: float = 0.05
+    entry_trim_frames: int = 10
+    exit_trim_frames: int = 0
+    hand_lost_s: float = 0.2
+    jump_distance_m: float = 0.05
+    jump_angle_rad: float = 0.8
+    jump_window_s: float = 0.05
+    jump_accept_after: int = 5
+    device_timeout_s: float = 0.3
+    device_priorities: Dict[str, int] = field(default_factory=dict)
+    active_device: str = ""
 
     def __post_init__(self):
         if self.filter_params is None:
-            self.filter_params = {"queue_size": 10}
-        if not (self.max_age_s > 0):
-            raise MotionSensorError(f"max_age_s must be > 0 seconds, got {self.max_age_s!r}")
-        if not (self.max_future_s >= 0):
-            raise MotionSensorError(f"max_future_s must be >= 0 seconds, got {self.max_future_s!r}")
+            self.filter_params = {"queue_size": 10} if self.filter_name == "mean" else {}
+        for name in ("max_age_s", "hand_lost_s", "jump_distance_m", "jump_angle_rad", "jump_window_s",
+                     "device_timeout_s"):
+            if not getattr(self, name) > 0:
+                raise MotionSensorError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        for name in ("max_future_s", "entry_trim_frames", "exit_trim_frames"):
+            if not getattr(self, name) >= 0:
+                raise MotionSensorError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        if self.jump_accept_after < 1:
+            raise MotionSensorError("jump_accept_after must be >= 1 frame")
 
 
 @dataclass
@@ -47,6 +74,7 @@ class SequencedPose:
     frame_id: str
     hand_type: str
     hands_num: int
+    device: str = ""
 
 
 def validate_sample(sample: HandSample) -> Optional[str]:
@@ -66,60 +94,208 @@ def validate_sample(sample: HandSample) -> Optional[str]:
     return None
 
 
+class DeviceBinder:
+    """Chooses the device that drives: forced by name, else the highest priority heard
+    within the timeout (unknown devices have priority 0; ties go to the earliest heard)."""
+
+    def __init__(self, priorities: Dict[str, int], timeout: float, forced: str = ""):
+        self.priorities = dict(priorities)
+        self.timeout = timeout
+        self.forced = forced
+        self.last_heard: Dict[str, float] = {}
+        self.active: Optional[str] = None
+
+    def hear(self, device: str, now: float) -> bool:
+        """Record a frame from ``device``; return whether it is the active device."""
+        self.last_heard.setdefault(device, now)
+        self.last_heard[device] = now
+        if self.forced:
+            self.active = self.forced
+            return device == self.forced
+        alive = [d for d, t in self.last_heard.items() if now - t <= self.timeout]
+        self.active = max(alive, key=lambda d: self.priorities.get(d, 0)) if alive else device
+        return device == self.active
+
+
 class Sequencer:
-    """Validates, de-stales and filters hand samples. Not thread-safe: one caller."""
+    """Validates, binds, de-stales, de-jumps, trims and filters hand samples.
+
+    Not thread-safe: one caller (the node holds a lock).
+    """
 
     def __init__(self, config: SequencerConfig = None):
         self.config = config or SequencerConfig()
         self.filter = make_filter(self.config.filter_name, **self.config.filter_params)
+        self.binder = DeviceBinder(self.config.device_priorities, self.config.device_timeout_s,
+                                   self.config.active_device)
         self.counters = Counter()
-        self._last_stamp = None
+        self._last_stamp: Dict[str, float] = {}
+        self._last_command_stamp = None
         self._hand_key = None
+        self._last_seen = None
+        self._since_entry = 0
+        self._last_accepted = None      # (stamp, position, orientation) of the last accepted raw frame
+        self._jump_candidates = []
+        self._delay = deque()
+        self._offset_position = np.zeros(3)
+        self._offset_rotation = np.array([0.0, 0.0, 0.0, 1.0])
+        self._continuity_pending = False
+        self._last_output: Optional[SequencedPose] = None
+        self._active_device = None
+
+    # -- inputs from the rest of the system ---------------------------------------------------
+    def note_command(self, stamp: float) -> None:
+        """The robot accepted a command made from the frame stamped ``stamp``; frames
+        older than that are outdated and will be dropped."""
+        if self._last_command_stamp is None or stamp > self._last_command_stamp:
+            self._last_command_stamp = stamp
 
     def reset(self) -> None:
-        """Forget the filter history and the last stamp (e.g. on a device switch)."""
+        """Forget the filter history and hand state (e.g. on an operator request)."""
         self.filter.reset()
-        self._last_stamp = None
         self._hand_key = None
+        self._delay.clear()
+        self._last_accepted = None
+        self._jump_candidates = []
 
-    def process(self, sample: HandSample, now: float) -> Optional[SequencedPose]:
-        """Take one sample at wall time ``now`` (s); return the filtered pose or None.
-
-        None means the frame was dropped; ``counters`` says why.
-        """
-        self.counters["frames_in"] += 1
-        # A frame without a hand is normal (the hand left the sensor), not malformed.
-        reason = "no_hand" if sample.hands_num == 0 and not sample.hand_types else validate_sample(sample)
-        if reason is None:
-            reason = self._timing_problem(sample.stamp, now)
-        if reason is not None:
-            self.counters["dropped_" + reason] += 1
-            return None
-        key = (sample.hand_id, sample.primary_type)
-        if key != self._hand_key:
-            if self._hand_key is not None:
-                self.counters["filter_reseeds"] += 1
-            # Two hands are never blended: a new hand starts a fresh filter.
-            self.filter.reset()
-            self._hand_key = key
-        self._last_stamp = sample.stamp
-        position, orientation = self.filter.update(sample.stamp, sample.position, sample.orientation)
-        self.counters["frames_out"] += 1
-        return SequencedPose(sample.stamp, position, orientation, sample.frame_id,
-                             sample.primary_type, sample.hands_num)
-
-    def _timing_problem(self, stamp: float, now: float) -> Optional[str]:
-        if self._last_stamp is not None and stamp == self._last_stamp:
-            return "duplicate"
-        if self._last_stamp is not None and stamp < self._last_stamp:
-            return "out_of_order"
-        if stamp > now + self.config.max_future_s:
-            return "future_stamp"
-        if now - stamp > self.config.max_age_s:
-            return "stale"
-        return None
+    @property
+    def active_device(self) -> Optional[str]:
+        """The device currently driving the output."""
+        return self.binder.active
 
     @property
     def dropped(self) -> int:
         """Total frames dropped for any reason."""
         return sum(v for k, v in self.counters.items() if k.startswith("dropped_"))
+
+    # -- the pipeline ------------------------------------------------------------------------
+    def process(self, sample: HandSample, now: float) -> Optional[SequencedPose]:
+        """Take one sample at wall time ``now`` (s); return the pose to publish, or None.
+
+        None means the frame was dropped or is held back; ``counters`` say why.
+        """
+        self.counters["frames_in"] += 1
+        device = sample.device or "default"
+        if not self.binder.hear(device, now):
+            return self._drop("inactive_device")
+        if self._active_device is not None and device != self._active_device:
+            self.counters["device_switches"] += 1
+            self._restart_hand(continuity=True)
+        self._active_device = device
+        if sample.hands_num == 0 and not sample.hand_types:
+            # The hand left the sensing area: what is still held back was its exit.
+            self._hand_left()
+            return self._drop("no_hand")
+        reason = validate_sample(sample) or self._timing_problem(device, sample.stamp, now)
+        if reason is not None:
+            return self._drop(reason)
+        self._last_stamp[device] = sample.stamp
+        if self._last_seen is not None and sample.stamp - self._last_seen > self.config.hand_lost_s:
+            self._hand_left()
+        self._last_seen = sample.stamp
+        key = (sample.hand_id, sample.primary_type)
+        if key != self._hand_key:
+            if self._hand_key is not None:
+                self.counters["filter_reseeds"] += 1
+            self._hand_key = key
+            self._restart_hand(continuity=False)
+        self._since_entry += 1
+        if self._since_entry <= self.config.entry_trim_frames:
+            self._last_accepted = (sample.stamp, np.asarray(sample.position, float), np.asarray(sample.orientation, float))
+            return self._drop("entry_trim")
+        if self._is_jump(sample):
+            return self._drop("jump")
+        self._delay.append(sample)
+        if len(self._delay) <= self.config.exit_trim_frames:
+            self.counters["held_for_exit_trim"] += 1
+            return None
+        return self._emit(self._delay.popleft())
+
+    def _drop(self, reason: str) -> None:
+        self.counters["dropped_" + reason] += 1
+        return None
+
+    def _timing_problem(self, device: str, stamp: float, now: float) -> Optional[str]:
+        last = self._last_stamp.get(device)
+        if last is not None and stamp == last:
+            return "duplicate"
+        if last is not None and stamp < last:
+            return "out_of_order"
+        if stamp > now + self.config.max_future_s:
+            return "future_stamp"
+        if now - stamp > self.config.max_age_s:
+            return "stale"
+        if self._last_command_stamp is not None and stamp < self._last_command_stamp:
+            return "older_than_command"
+        return None
+
+    def _restart_hand(self, continuity: bool) -> None:
+        """A new hand or device: fresh filter, entry trim again, no blending."""
+        self.filter.reset()
+        self._delay.clear()
+        self._since_entry = 0
+        self._last_accepted = None
+        self._jump_candidates = []
+        self._continuity_pending = continuity and self._last_output is not None
+
+    def _hand_left(self) -> None:
+        if self._delay:
+            self.counters["dropped_exit_trim"] += len(self._delay)
+            self._delay.clear()
+        self._hand_key = None
+
+    def _is_jump(self, sample: HandSample) -> bool:
+        position = np.asarray(sample.position, dtype=float)
+        orientation = np.asarray(sample.orientation, dtype=float)
+        if self._last_accepted is None:
+            self._last_accepted = (sample.stamp, position, orientation)
+            return False
+        stamp, last_position, last_orientation = self._last_accepted
+        distance = float(np.linalg.norm(position - last_position))
+        angle = 2.0 * float(np.arccos(min(abs(float(np.dot(orientation, last_orientation))), 1.0)))
+        quick = sample.stamp - stamp <= self.config.jump_window_s
+        if quick and (distance > self.config.jump_distance_m or angle > self.config.jump_angle_rad):
+            # A real move shows up as frames that agree with each other at the new place.
+            if self._jump_candidates and np.linalg.norm(position - self._jump_candidates[-1]) > \
+                    self.config.jump_distance_m:
+                self._jump_candidates = []
+            self._jump_candidates.append(position)
+            if len(self._jump_candidates) < self.config.jump_accept_after:
+                return True
+            self.counters["jumps_accepted"] += 1
+            self.filter.reset()
+            self._continuity_pending = self._last_output is not None
+        self._jump_candidates = []
+        self._last_accepted = (sample.stamp, position, orientation)
+        return False
+
+    def _emit(self, sample: HandSample) -> SequencedPose:
+        position, orientation = self.filter.update(sample.stamp, sample.position, sample.orientation)
+        if self._continuity_pending:
+            # Keep the output where it was: later motion is relative to here.
+            last = self._last_output
+            self._offset_position = last.position - position
+            self._offset_rotation = _quat_multiply(last.orientation, _quat_conjugate(orientation))
+            self._continuity_pending = False
+        position = position + self._offset_position
+        orientation = _quat_multiply(self._offset_rotation, orientation)
+        orientation = orientation / np.linalg.norm(orientation)
+        out = SequencedPose(sample.stamp, position, orientation, sample.frame_id, sample.primary_type,
+                            sample.hands_num, sample.device)
+        self._last_output = out
+        self.counters["frames_out"] += 1
+        return out
+
+
+def _quat_conjugate(q: np.ndarray) -> np.ndarray:
+    return np.array([-q[0], -q[1], -q[2], q[3]])
+
+
+def _quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product of quaternions (x, y, z, w)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return np.array([aw * bx + ax * bw + ay * bz - az * by,
+                     aw * by - ax * bz + ay * bw + az * bx,
+                     aw * bz + ax * by - ay * bx + az * bw,
+                     aw * bw - ax * bx - ay * by - az * bz])
