@@ -94,3 +94,15 @@ def test_reconnects_with_backoff_after_a_drop():
     server.shutdown()
     assert client.counters["connections"] >= 2  # came back after the server closed the socket
     assert len(frames) >= len(server.frames)
+
+
+def test_clock_mapper_restarts_with_the_device_clock():
+    clock = ClockMapper()
+    clock.to_local(50.0, 1000.0)
+    assert clock.to_local(1.0, 1001.0) == pytest.approx(1001.0)  # device clock went back: re-synced
+
+
+def test_dropout_loses_frames_like_a_real_link():
+    server = LeapReplayServer(RECORDING, port=free_port(), faults=Faults(dropout_at=20, dropout_s=0.1))
+    lost = [i for i in range(len(server.frames)) if server._lost(i)]
+    assert lost[0] == 20 and 8 <= len(lost) <= 13  # about 0.1 s of frames at ~110 fps

@@ -49,13 +49,18 @@ class ClockMapper:
 
     def __init__(self, window: int = 500):
         self._offsets = deque(maxlen=window)
+        self._last_device_time = None
 
     def reset(self) -> None:
         """Forget the offset (a new connection may mean a restarted device clock)."""
         self._offsets.clear()
+        self._last_device_time = None
 
     def to_local(self, device_time: float, received: float) -> float:
         """Local time at which the device took the frame."""
+        if self._last_device_time is not None and device_time < self._last_device_time:
+            self.reset()  # the device clock restarted (service restart, replay loop)
+        self._last_device_time = device_time
         self._offsets.append(received - device_time)
         return device_time + min(self._offsets)
 

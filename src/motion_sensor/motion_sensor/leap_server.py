@@ -2,8 +2,8 @@
 
 It sends exactly what a Leap service sends ({"version":6}, then frame texts), so the Leap
 driver can be run and tested without a device. Faults can be injected to exercise the
-driver and the sequencer: malformed, truncated, oversized and NaN frames, dropouts (a
-pause), and hand exit and entry (frames without hands). Used by the rostests and the
+driver and the sequencer: malformed, truncated, oversized and NaN frames, dropouts (frames
+lost), and hand exit and entry (frames without hands). Used by the rostests and the
 ``leap_replay_server`` tool.
 """
 import gzip
@@ -27,8 +27,8 @@ class Faults:
     truncated: List[int] = field(default_factory=list)     # cut in half
     oversized: List[int] = field(default_factory=list)     # padded past 256 kB
     nan: List[int] = field(default_factory=list)           # palmPosition becomes NaN
-    dropout_at: Optional[int] = None                        # pause before this frame ...
-    dropout_s: float = 0.0                                  # ... for this long
+    dropout_at: Optional[int] = None                        # frames from this one ...
+    dropout_s: float = 0.0                                  # ... for this long are lost (not sent)
     exit_at: Optional[int] = None                           # from here, frames carry no hand ...
     exit_frames: int = 0                                    # ... for this many frames (then re-entry)
 
@@ -94,9 +94,8 @@ class LeapReplayServer:
             while True:
                 start, origin = time.monotonic(), self.stamps[0]
                 for index, text in enumerate(self.frames):
-                    if self.faults.dropout_at == index:
-                        time.sleep(self.faults.dropout_s)
-                        start += self.faults.dropout_s
+                    if self._lost(index):
+                        continue
                     if self.rate > 0:
                         delay = start + (self.stamps[index] - origin) / self.rate - time.monotonic()
                         if delay > 0:
@@ -109,6 +108,13 @@ class LeapReplayServer:
             socket.close()
         except ConnectionClosed:
             pass
+
+    def _lost(self, index: int) -> bool:
+        """True for frames inside the injected dropout (lost as on a real link)."""
+        at = self.faults.dropout_at
+        if at is None or index < at:
+            return False
+        return self.stamps[index] - self.stamps[at] < self.faults.dropout_s
 
     def _read_controls(self, socket) -> None:
         try:
