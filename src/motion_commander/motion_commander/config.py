@@ -19,6 +19,7 @@ class TeleopConfig:
     speed_ratio: float = 1.0                 # m of tool motion per m of hand motion
     follow_orientation: bool = True
     hand_to_robot_rpy: list = field(default_factory=lambda: [0.0, 0.0, 0.0])  # rad
+    registration_file: str = ""              # register_device YAML; its rotation overrides the rpy
     engage: str = "auto"                     # auto | gesture | button
     steady_frames: int = 10                  # frames of steady tracking before engage
     lost_after: float = 0.2                  # s without a frame before disengage
