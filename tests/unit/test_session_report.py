@@ -60,3 +60,20 @@ def test_replay_schedule_rate_offset_and_fast_mode():
     assert [i for i, _ in replay_schedule(times, start_offset=0.2)] == [2, 3]
     assert {due for _, due in replay_schedule(times, rate=0)} == {0.0}
     assert list(replay_schedule([])) == []
+
+
+def test_csv_replay_reads_rows_and_reports_bad_ones(tmp_path):
+    from motion_sensor.errors import MotionSensorError
+    from motion_sensor.replay import read_csv
+    path = tmp_path / "hand.csv"
+    path.write_text("stamp,x,y,z,qx,qy,qz,qw,hand_type\n"
+                    "1.00,0.1,0.0,0.2,0,0,0,1,right\n"
+                    "1.01,oops,0.0,0.2,0,0,0,1,right\n"
+                    "1.02,0.1,0.0,0.2,0,0,0,1,middle\n"
+                    "1.03,0.0,0.0,0.0,0,0,0,1,\n")
+    samples, rejected = read_csv(str(path))
+    assert [s.hands_num for s in samples] == [1, 0] and samples[0].device == "csv"
+    assert len(rejected) == 2 and rejected[0].startswith("line 3")
+    (tmp_path / "bad.csv").write_text("t,x\n1,2\n")
+    with pytest.raises(MotionSensorError, match="lacks columns"):
+        read_csv(str(tmp_path / "bad.csv"))

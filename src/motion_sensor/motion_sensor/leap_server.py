@@ -82,6 +82,7 @@ class LeapReplayServer:
         self.start_delay = start_delay
         self.received: List[str] = []
         self.sent = 0
+        self.send_times = {}  # frame index -> time.time() when sent (latency benchmarks)
         self.done = threading.Event()
         self._server = None
 
@@ -101,6 +102,7 @@ class LeapReplayServer:
                         if delay > 0:
                             time.sleep(delay)
                     socket.send(_inject(index, text, self.faults))
+                    self.send_times.setdefault(index, time.time())
                     self.sent += 1
                 self.done.set()
                 if not self.loop:
