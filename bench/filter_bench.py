@@ -28,6 +28,9 @@ SWEEPS = {
     "mean": [{"queue_size": n} for n in (2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 30)],
     "one_euro": [{"mincutoff": m, "beta": b, "dcutoff": d} for m in (0.05, 0.3, 1.0, 3.0)
                  for b in (2.0, 5.0, 10.0, 20.0, 40.0, 80.0) for d in (0.3, 1.0, 3.0, 8.0)],
+    "one_euro+deadband": [{"mincutoff": m, "beta": b, "dcutoff": 1.0, "deadband": db}
+                          for m in (1.0, 3.0, 8.0) for b in (20.0, 80.0)
+                          for db in (0.0002, 0.0005, 0.001, 0.0015, 0.002, 0.003)],
     "kalman": [{"process_noise": q, "measurement_noise": r} for r in (0.0003, 0.001)
                for q in (1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 0.01, 0.03, 0.1, 0.3, 1.0)],
 }
@@ -46,7 +49,7 @@ def load(name):
 
 def run_filter(name, params, stamps, raw, quats):
     """Filtered positions of one recording."""
-    f = make_filter(name, **params)
+    f = make_filter(name.split("+")[0], **params)
     return np.array([f.update(t, p, q)[0] for t, p, q in zip(stamps, raw, quats)])
 
 
@@ -111,7 +114,7 @@ def main():
     mean10 = next(c for c in curves["mean"] if c["params"]["queue_size"] == 10)
     results["mean10"] = mean10
     verdict = {}
-    for name in ("one_euro", "kalman"):
+    for name in ("one_euro", "one_euro+deadband", "kalman"):
         at_mean10 = lag_at_jitter(curves[name], mean10["jitter_mm"])
         at_leap = lag_at_jitter(curves[name], results["leap_stabilized"]["jitter_mm"])
         verdict[name] = {
@@ -138,7 +141,7 @@ def plot(results, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(8, 5.5))
-    styles = {"mean": "o-", "one_euro": "s-", "kalman": "^-"}
+    styles = {"mean": "o-", "one_euro": "s-", "one_euro+deadband": "D-", "kalman": "^-"}
     for name, curve in results["curves"].items():
         front = pareto(curve)
         ax.plot([c["jitter_mm"] for c in front], [c["lag_mm"] for c in front], styles[name],

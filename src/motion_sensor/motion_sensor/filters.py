@@ -87,17 +87,24 @@ class OneEuroFilter:
     (Hz) the smoothing of the speed estimate. The rate comes from the stamps, so irregular
     frame gaps are handled. Orientation uses the same scheme on the unit sphere (slerp
     toward the new sample, cutoff opened by the angular speed in rad/s, ``beta_rot``).
+
+    ``deadband`` (m, default 0 = off) adds a hysteresis stage after the low-pass: the
+    output moves only by what the filtered position exceeds that radius around it, so a
+    hand held still gives a still output, and a moving one is followed at most
+    ``deadband`` behind.
     """
 
     # Defaults from bench/filter_bench.py on the real recordings: steadier than mean-10
     # (0.37 vs 0.44 mm jitter) with about half its lag (5.4 vs 9.8 mm).
-    def __init__(self, mincutoff: float = 1.0, beta: float = 40.0, dcutoff: float = 0.3, beta_rot: float = 0.5):
+    def __init__(self, mincutoff: float = 1.0, beta: float = 40.0, dcutoff: float = 0.3, beta_rot: float = 0.5,
+                 deadband: float = 0.0):
         for name, value in (("mincutoff", mincutoff), ("dcutoff", dcutoff)):
             if not value > 0:
                 raise MotionSensorError(f"one_euro {name} must be > 0 Hz, got {value!r}")
-        if beta < 0 or beta_rot < 0:
-            raise MotionSensorError("one_euro beta and beta_rot must be >= 0")
+        if beta < 0 or beta_rot < 0 or deadband < 0:
+            raise MotionSensorError("one_euro beta, beta_rot and deadband must be >= 0")
         self.mincutoff, self.beta, self.dcutoff, self.beta_rot = mincutoff, beta, dcutoff, beta_rot
+        self.deadband = float(deadband)
         self.reset()
 
     def reset(self) -> None:
@@ -107,6 +114,17 @@ class OneEuroFilter:
         self._velocity = np.zeros(3)
         self._orientation = None
         self._angular_speed = 0.0
+        self._output = None
+
+    def _hysteresis(self) -> np.ndarray:
+        if self.deadband == 0.0 or self._output is None:
+            self._output = self._position.copy()
+            return self._output.copy()
+        excess = self._position - self._output
+        distance = float(np.linalg.norm(excess))
+        if distance > self.deadband:
+            self._output = self._output + excess * (1.0 - self.deadband / distance)
+        return self._output.copy()
 
     def update(self, stamp: float, position: np.ndarray, orientation: np.ndarray):
         """Filter one pose; return (position, orientation)."""
@@ -114,10 +132,10 @@ class OneEuroFilter:
         orientation = np.asarray(orientation, dtype=float)
         if self._stamp is None:
             self._stamp, self._position, self._orientation = stamp, position.copy(), orientation.copy()
-            return self._position.copy(), self._orientation.copy()
+            return self._hysteresis(), self._orientation.copy()
         dt = stamp - self._stamp
         if dt <= 0:
-            return self._position.copy(), self._orientation.copy()
+            return self._hysteresis(), self._orientation.copy()
         self._stamp = stamp
         # Position: filtered speed opens the cutoff.
         raw_velocity = (position - self._position) / dt
@@ -132,7 +150,7 @@ class OneEuroFilter:
         self._angular_speed = a_d * raw_angular + (1 - a_d) * self._angular_speed
         a_rot = _smoothing_factor(dt, self.mincutoff + self.beta_rot * self._angular_speed)
         self._orientation = _slerp(self._orientation, orientation, a_rot)
-        return self._position.copy(), self._orientation.copy()
+        return self._hysteresis(), self._orientation.copy()
 
 
 class KalmanFilter:
