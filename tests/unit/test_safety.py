@@ -145,3 +145,17 @@ def test_no_joint_step_above_the_limits_at_engage():
             continue
         assert np.all(np.abs(command.joints - previous) <= max_step * 0.01 + 1e-9)
         previous = command.joints
+
+
+def test_teleop_config_is_checked_with_the_file_named():
+    from motion_commander.config import load_teleop_config
+    config = load_teleop_config({"speed_ratio": 0.5, "engage": "gesture", "joint_acceleration": 30.0,
+                                 "workspace_lower": [-1, -1, 0], "input": "pose"}, "my.yaml")
+    assert config.speed_ratio == 0.5 and config.safety.joint_acceleration == 30.0
+    for bad, fragment in [({"speed_ratio": -1}, "speed_ratio"), ({"engage": "psychic"}, "engage"),
+                          ({"joint_speed_scale": 1.5}, "fraction"), ({"stale_timout_s": 0.1}, "unknown"),
+                          ({"workspace_lower": [0, 0]}, "workspace_lower"), ({"input": "udp"}, "input"),
+                          ({"singularity_slowdown": 90.0}, "singularity")]:
+        with pytest.raises(MotionCommanderError, match=fragment) as err:
+            load_teleop_config(bad, "my.yaml")
+        assert "my.yaml" in str(err.value)

@@ -21,6 +21,7 @@ class DriverStatus:
     fault: str = ""
     protective_stop: bool = False
     safety_mode: str = ""
+    gripper: str = ""          # "" released; else what holds: the gripped body (sim) or "on" (IO gripper)
 
 
 class RobotDriver(abc.ABC):

@@ -193,7 +193,8 @@ class PybulletSimDriver(RobotDriver):
 
     def status(self) -> DriverStatus:
         moving = self._path is not None
-        return DriverStatus(connected=self._client is not None, moving=moving)
+        gripper = (self.gripped_body or "on (empty)") if self.outputs.get(self.gripper_output) else ""
+        return DriverStatus(connected=self._client is not None, moving=moving, gripper=gripper)
 
     @property
     def sim_time(self) -> float:

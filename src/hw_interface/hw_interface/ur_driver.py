@@ -102,6 +102,7 @@ class URRtdeDriver(RobotDriver):
         self._stream_thread: Optional[threading.Thread] = None
         self._streaming = threading.Event()
         self._fault = ""
+        self._gripper_on = False
         self.servo_periods = 0
         self.missed_periods = 0
 
@@ -214,7 +215,7 @@ class URRtdeDriver(RobotDriver):
             except Exception as exc:
                 return DriverStatus(connected=False, fault=f"status read failed: {exc}")
             return DriverStatus(connected=connected, moving=moving, fault=self._fault, protective_stop=stopped,
-                                safety_mode=safety)
+                                safety_mode=safety, gripper="on" if self._gripper_on else "")
 
     # -- motion ----------------------------------------------------------------------------
     def set_joints(self, joints) -> None:
@@ -256,6 +257,7 @@ class URRtdeDriver(RobotDriver):
 
     def set_gripper(self, closed: bool) -> None:
         self.set_digital_output(self.gripper_output, closed)
+        self._gripper_on = bool(closed)
 
     def set_digital_output(self, output: int, value: bool) -> None:
         with self._lock:

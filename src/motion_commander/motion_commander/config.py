@@ -16,6 +16,7 @@ class TeleopConfig:
     """Mapping and clutch parameters; ``safety`` holds the safety rules' parameters."""
 
     tool_frame: str = "tool0"
+    input: str = "stamped"                   # stamped | pose
     speed_ratio: float = 1.0                 # m of tool motion per m of hand motion
     follow_orientation: bool = True
     hand_to_robot_rpy: list = field(default_factory=lambda: [0.0, 0.0, 0.0])  # rad
@@ -72,7 +73,7 @@ def load_teleop_config(params: dict, source: str = "teleop.yaml") -> TeleopConfi
     safety = SafetyConfig()
     top = {f.name for f in fields(TeleopConfig)} - {"safety"}
     safety_names = {f.name for f in fields(SafetyConfig)}
-    ignored = {"urdf", "config_file", "input"}
+    ignored = {"urdf", "config_file"}
     for name, value in params.items():
         if name in top:
             setattr(config, name, _convert(name, getattr(TeleopConfig(), name), value, source))
@@ -81,6 +82,8 @@ def load_teleop_config(params: dict, source: str = "teleop.yaml") -> TeleopConfi
         elif name not in ignored:
             known = sorted(top | safety_names)
             raise MotionCommanderError(f"{source}: unknown parameter '{name}'; known parameters: {known}")
+    if config.input not in ("stamped", "pose"):
+        raise MotionCommanderError(f"{source}: parameter 'input' must be stamped or pose, got {config.input!r}")
     if config.engage not in ("auto", "gesture", "button"):
         raise MotionCommanderError(f"{source}: parameter 'engage' must be auto, gesture or button, "
                                    f"got {config.engage!r}")
