@@ -7,7 +7,6 @@ Run: bench/run core_bench [--paths 20]
 Writes bench/results/core_bench.json and bench/results/core_bench.png.
 """
 import argparse
-import json
 import os
 import sys
 import time
@@ -18,6 +17,7 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 for package in ("motion_sensor", "motion_commander"):
     sys.path.insert(0, os.path.join(ROOT, "src", package))
 
+from bench_common import RESULTS, write_results  # noqa: E402
 from motion_commander.kinematics import RobotKinematics  # noqa: E402
 from motion_commander.teleop import TeleopMapper, make_clutch  # noqa: E402
 from motion_commander.teleop_core import SafetyConfig, TeleopCore  # noqa: E402
@@ -122,13 +122,9 @@ def main():
         results["ik"][robot], ik_samples[f"IK warm ({robot})"] = ik_benchmark(robot, args.paths, rng)
     print("core cost per frame on real recordings...", flush=True)
     results["core"], core_samples = core_benchmark()
-    out = os.path.join(ROOT, "bench", "results")
-    os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "core_bench.json"), "w", encoding="utf-8") as fh:
-        json.dump(results, fh, indent=2)
-    plot(ik_samples, core_samples, os.path.join(out, "core_bench.png"))
-    print(json.dumps(results, indent=2))
-    print(f"written to {out}/core_bench.json and core_bench.png")
+    write_results("core_bench", results)
+    plot(ik_samples, core_samples, os.path.join(RESULTS, "core_bench.png"))
+    print(f"plot: {os.path.join(RESULTS, 'core_bench.png')}")
 
 
 if __name__ == "__main__":

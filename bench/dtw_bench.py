@@ -6,12 +6,13 @@ Run: bench/run dtw_bench [--trials 20]
 Writes bench/results/dtw_bench.json. Goals: error <= 2 mm and <= 1 deg; <= 50 ms at 1000 frames.
 """
 import argparse
-import json
 import os
 import sys
 import time
 
 import numpy as np
+
+from bench_common import write_results
 from scipy.spatial.transform import Rotation
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
@@ -73,11 +74,7 @@ def main():
                "time_ms": {"p50": round(float(np.median(seconds)) * 1000, 2),
                            "p99": round(float(np.percentile(seconds, 99)) * 1000, 2)},
                "goals": {"error_mm": 2.0, "angle_deg": 1.0, "time_ms": 50.0}}
-    path = os.path.join(ROOT, "bench", "results", "dtw_bench.json")
-    with open(path, "w", encoding="utf-8") as fh:
-        json.dump(results, fh, indent=2)
-    print(json.dumps(results, indent=2))
-    print(f"written to {path}")
+    write_results("dtw_bench", results)
 
 
 if __name__ == "__main__":

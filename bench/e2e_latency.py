@@ -12,6 +12,8 @@ import os
 import subprocess
 import tempfile
 
+from bench_common import write_results
+
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 DEFAULT = ["Waiting-110fps", "test-paddle-rightwards", "rollAndPitchCropped"]
 PORT = 11478
@@ -44,10 +46,8 @@ def main():
     worst_p99 = max(r["latency_p99_ms"] for r in results.values())
     results["worst_p99_ms"] = worst_p99
     results["goal_p99_ms"] = 5.0
-    path = os.path.join(ROOT, "bench", "results", "e2e_latency.json")
-    with open(path, "w", encoding="utf-8") as fh:
-        json.dump(results, fh, indent=2)
-    print(f"worst p99 {worst_p99} ms (goal <= 5 ms); written to {path}")
+    write_results("e2e_latency", results, show=False)
+    print(f"worst p99 {worst_p99} ms (goal <= 5 ms)")
 
 
 if __name__ == "__main__":

@@ -19,6 +19,7 @@ import numpy as np
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_sensor"))
 
+from bench_common import RESULTS, write_results  # noqa: E402
 from motion_sensor.filters import make_filter  # noqa: E402
 from motion_sensor.leap_v6 import read_recording, select_primary  # noqa: E402
 
@@ -126,13 +127,12 @@ def main():
         }
     results["curves"] = curves
     results["verdict"] = verdict
-    out = os.path.join(ROOT, "bench", "results")
-    os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "filter_bench.json"), "w", encoding="utf-8") as fh:
-        json.dump(results, fh, indent=2)
-    plot(results, os.path.join(out, "filter_tradeoff.png"))
-    print(json.dumps({k: results[k] for k in ("raw", "leap_stabilized", "mean10", "verdict")}, indent=2))
-    print(f"written to {out}/filter_bench.json and filter_tradeoff.png")
+    write_results("filter_bench", results, show=False)
+    plot(results, os.path.join(RESULTS, "filter_tradeoff.png"))
+    summary = {name: {k: v for k, v in verdict.items() if k != "pareto"} for name, verdict in verdict.items()}
+    print(json.dumps({"raw": results["raw"], "leap_stabilized": results["leap_stabilized"],
+                      "mean10": results["mean10"], "verdict": summary}, indent=2))
+    print(f"plot: {os.path.join(RESULTS, 'filter_tradeoff.png')}")
 
 
 def plot(results, path):

@@ -6,13 +6,14 @@ Run: bench/run hw_bench [--stream-seconds 10] [--calls 2000]
 Writes bench/results/hw_bench.json.
 """
 import argparse
-import json
 import os
 import subprocess
 import sys
 import time
 
 import numpy as np
+
+from bench_common import write_results
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 HOME = np.array([0.0, -1.5707963, 1.5707963, -1.5707963, -1.5707963, 0.0])
@@ -113,12 +114,7 @@ def main():
     results = {"simulator": sim_real_time_factor(args.sim_seconds)}
     results.update(service_benchmarks(args.calls, args.stream_seconds))
     results["machine"] = {"cores": os.cpu_count()}
-    os.makedirs(os.path.join(ROOT, "bench", "results"), exist_ok=True)
-    path = os.path.join(ROOT, "bench", "results", "hw_bench.json")
-    with open(path, "w", encoding="utf-8") as fh:
-        json.dump(results, fh, indent=2)
-    print(json.dumps(results, indent=2))
-    print(f"written to {path}")
+    write_results("hw_bench", results)
 
 
 if __name__ == "__main__":

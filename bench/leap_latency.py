@@ -6,7 +6,6 @@ Also reported: to /motion_sensor/raw_hand (driver only).
 Run: bench/run leap_latency
 Writes bench/results/leap_latency.json.
 """
-import json
 import os
 import subprocess
 import sys
@@ -14,6 +13,8 @@ import threading
 import time
 
 import numpy as np
+
+from bench_common import write_results
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 PORT, MASTER = 6466, 11479
@@ -84,10 +85,7 @@ def main():
     finally:
         master.terminate()
         master.wait(10)
-    path = os.path.join(ROOT, "bench", "results", "leap_latency.json")
-    with open(path, "w", encoding="utf-8") as fh:
-        json.dump(results, fh, indent=2)
-    print(f"written to {path}")
+    write_results("leap_latency", results, show=False)
 
 
 if __name__ == "__main__":

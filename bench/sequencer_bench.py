@@ -5,12 +5,13 @@ timing, trims, jump gate, filter, continuity). Baseline: the filter's update alo
 Run: bench/run sequencer_bench
 Writes bench/results/sequencer_bench.json.
 """
-import json
 import os
 import sys
 import time
 
 import numpy as np
+
+from bench_common import write_results
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_sensor"))
@@ -63,10 +64,7 @@ def main():
         print(f"{name:9s} sequencer p50 {results[name]['sequencer']['p50_us']} us, "
               f"p99 {results[name]['sequencer']['p99_us']} us (filter alone p50 "
               f"{results[name]['filter_only_baseline']['p50_us']} us)", flush=True)
-    path = os.path.join(ROOT, "bench", "results", "sequencer_bench.json")
-    with open(path, "w", encoding="utf-8") as fh:
-        json.dump(results, fh, indent=2)
-    print(f"written to {path}")
+    write_results("sequencer_bench", results, show=False)
 
 
 if __name__ == "__main__":

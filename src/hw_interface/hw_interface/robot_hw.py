@@ -87,3 +87,22 @@ class RobotDriver(abc.ABC):
     @abc.abstractmethod
     def status(self) -> DriverStatus:
         """Connection, motion and fault state."""
+
+
+class UrdfModelMixin:
+    """Joint names, limits and the robot list of a driver that holds a pinocchio model
+    (``self.kinematics``) and a ``self.robot_name``: shared by the shipped drivers."""
+
+    @property
+    def joint_names(self) -> List[str]:
+        """Joint names in command order (the URDF's)."""
+        return list(self.kinematics.joint_names)
+
+    @property
+    def joint_limits(self) -> Tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) joint limits from the URDF."""
+        return self.kinematics.lower.copy(), self.kinematics.upper.copy()
+
+    def get_robots(self) -> List[Tuple[str, int]]:
+        """GetRobots: the one robot this driver drives, with its DOF."""
+        return [(self.robot_name, self.kinematics.dof)]

@@ -14,7 +14,7 @@ from motion_commander.kinematics import RobotKinematics, pose_to_se3
 
 from .errors import HwInterfaceError
 from .protocol import Result
-from .robot_hw import DriverStatus, RobotDriver
+from .robot_hw import DriverStatus, RobotDriver, UrdfModelMixin
 from .trajectory import JointPath, joint_move_duration, trapezoid_duration
 
 
@@ -57,7 +57,7 @@ def entry_is_fixed(spec, name) -> bool:
     return False
 
 
-class PybulletSimDriver(RobotDriver):
+class PybulletSimDriver(UrdfModelMixin, RobotDriver):
     """Simulated arm. ``login("sim://")`` starts the physics; ``disconnect()`` ends it.
 
     Parameters: ``urdf_path`` of the robot, ``tool_frame`` (a link name), ``gui``,
@@ -113,17 +113,6 @@ class PybulletSimDriver(RobotDriver):
         self.gripped_body: Optional[str] = None
 
     # -- template: connection ------------------------------------------------------------
-    @property
-    def joint_names(self):
-        return list(self.kinematics.joint_names)
-
-    @property
-    def joint_limits(self):
-        return self.kinematics.lower.copy(), self.kinematics.upper.copy()
-
-    def get_robots(self):
-        return [(self.robot_name, self.kinematics.dof)]
-
     def login(self, url: str = "sim://", user: str = "", password: str = "") -> None:
         if self._client is not None:
             return

@@ -20,7 +20,7 @@ from motion_commander.kinematics import RobotKinematics
 
 from .errors import HwInterfaceError
 from .protocol import Result
-from .robot_hw import DriverStatus, RobotDriver
+from .robot_hw import DriverStatus, RobotDriver, UrdfModelMixin
 
 
 # UR safety modes as RTDEReceiveInterface.getSafetyMode() numbers them.
@@ -49,7 +49,7 @@ def ur_to_pose(pose):
     return pose[:3], Rotation.from_rotvec(pose[3:6]).as_quat()
 
 
-class URRtdeDriver(RobotDriver):
+class URRtdeDriver(UrdfModelMixin, RobotDriver):
     """A Universal Robots arm over RTDE.
 
     Parameters: ``urdf_path`` (the arm's model: joint names and limits), ``robot_ip``,
@@ -107,17 +107,6 @@ class URRtdeDriver(RobotDriver):
         self.missed_periods = 0
 
     # -- connection ------------------------------------------------------------------------
-    @property
-    def joint_names(self):
-        return list(self.kinematics.joint_names)
-
-    @property
-    def joint_limits(self):
-        return self.kinematics.lower.copy(), self.kinematics.upper.copy()
-
-    def get_robots(self):
-        return [(self.robot_name, self.kinematics.dof)]
-
     def login(self, url: str = "", user: str = "", password: str = "") -> None:
         ip = url.replace("ur://", "").strip("/") if url and not url.startswith("sim") else self.robot_ip
         if not ip:

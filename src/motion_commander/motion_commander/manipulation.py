@@ -94,18 +94,17 @@ class ManipulationAPI:
 
     def pick(self, position, orientation: Optional[Sequence[float]] = None) -> None:
         """Approach above, descend, grip, retreat. Orientation defaults to the current one."""
-        orientation = list(self.info_getPose()[1] if orientation is None else orientation)
-        self.controller.move_l(list(self._above(position)), orientation)
-        self.controller.move_l(list(position), orientation)
-        self.controller.set_gripper(True)
-        self.controller.move_l(list(self._above(position)), orientation)
+        self._visit(position, orientation, grip=True)
 
     def place(self, position, orientation: Optional[Sequence[float]] = None) -> None:
         """Approach above, descend, release, retreat."""
+        self._visit(position, orientation, grip=False)
+
+    def _visit(self, position, orientation, grip: bool) -> None:
         orientation = list(self.info_getPose()[1] if orientation is None else orientation)
         self.controller.move_l(list(self._above(position)), orientation)
         self.controller.move_l(list(position), orientation)
-        self.controller.set_gripper(False)
+        self.controller.set_gripper(grip)
         self.controller.move_l(list(self._above(position)), orientation)
 
     def pick_and_place(self, pick_position, place_position, orientation=None) -> None:
