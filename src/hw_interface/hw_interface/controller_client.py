@@ -1,9 +1,11 @@
-"""MotionControllerClient: a persistent Python client of /motion_controller.
+"""MotionControllerClient: a persistent, thread-safe Python client of /motion_controller.
 
 This module is the package's ROS edge for scripts (it imports rospy); the caller must have
 called rospy.init_node. Every method raises HwInterfaceError, carrying the commander.srv
 result code, when the server refuses or fails a command.
 """
+import threading
+
 import rospy
 
 from motion_commander.srv import commander, commanderRequest
@@ -24,6 +26,9 @@ class MotionControllerClient:
                                    "is motion_controller_server running (launch/hw_sim.launch)?",
                                    Result.NOT_CONNECTED) from None
         self._proxy = rospy.ServiceProxy(service, commander, persistent=True)
+        # One persistent connection carries one request at a time; callers on several
+        # threads (subscribers, timers, service handlers) take turns.
+        self._lock = threading.Lock()
 
     def call(self, command_index: int, position=(), orientation=(), joints=(), frame_id: str = "", stamp=None,
              check: bool = True):
@@ -33,12 +38,13 @@ class MotionControllerClient:
         request.header.frame_id = frame_id
         if stamp is not None:
             request.header.stamp = stamp
-        try:
-            response = self._proxy(request)
-        except (rospy.ServiceException, rospy.ROSException):
-            # A persistent connection dies with the server; one fresh try is enough.
-            self._proxy = rospy.ServiceProxy(self.service, commander, persistent=True)
-            response = self._proxy(request)
+        with self._lock:
+            try:
+                response = self._proxy(request)
+            except (rospy.ServiceException, rospy.ROSException):
+                # A persistent connection dies with the server; one fresh try is enough.
+                self._proxy = rospy.ServiceProxy(self.service, commander, persistent=True)
+                response = self._proxy(request)
         if check and response.result != Result.SUCCESS:
             raise HwInterfaceError(f"{CommandIndex(command_index).name if command_index in set(CommandIndex) else command_index} "
                                    f"refused: {Result(response.result).name}: {response.header.frame_id}",

@@ -64,12 +64,9 @@ class JointStepLimiter:
         ``speed_fraction`` in [0, 1] scales the velocity limit (ramps, singularity slow-down).
         """
         previous = np.asarray(previous, dtype=float)
-        target = np.asarray(target, dtype=float)
+        step = np.asarray(target, dtype=float) - previous
         dt = float(np.clip(dt, self.min_dt, self.max_dt))
-        step = target - previous
-        max_step = self.max_velocity * dt * max(speed_fraction, 0.0)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = float(np.max(np.where(max_step > 0, np.abs(step) / max_step, np.where(step != 0, np.inf, 0))))
+        ratio = self.overshoot(previous, target, dt, speed_fraction)
         limited = ratio > 1.0
         if limited:
             step = step / ratio if np.isfinite(ratio) else np.zeros_like(step)

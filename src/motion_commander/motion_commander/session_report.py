@@ -53,6 +53,7 @@ def summarize(data: SessionData) -> dict:
     tools = np.asarray(data.tools, dtype=float).reshape(-1, 4)
     errors = tracking_errors(targets, tools) * 1000.0
     latencies = np.asarray(data.latencies, dtype=float) * 1000.0
+    settled = final_error(targets, tools)
 
     def pct(values, q):
         return round(float(np.percentile(values, q)), 3) if len(values) else None
@@ -68,8 +69,7 @@ def summarize(data: SessionData) -> dict:
         "tracking_error_rms_mm": round(float(np.sqrt(np.mean(errors ** 2))), 3) if len(errors) else None,
         "tracking_error_p95_mm": pct(errors, 95),
         "tracking_error_max_mm": round(float(errors.max()), 3) if len(errors) else None,
-        "final_error_mm": None if not np.isfinite(final_error(targets, tools))
-        else round(final_error(targets, tools) * 1000.0, 3),
+        "final_error_mm": round(settled * 1000.0, 3) if np.isfinite(settled) else None,
         "latency_p50_ms": pct(latencies, 50),
         "latency_p99_ms": pct(latencies, 99),
         "latency_samples": int(len(latencies)),

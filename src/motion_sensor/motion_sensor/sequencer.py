@@ -26,6 +26,9 @@ from .errors import MotionSensorError
 from .filters import make_filter
 from .hand_sample import HandSample
 
+# Drops that are the sequencer doing its job, not bad input: counted, never warned about.
+EXPECTED_DROPS = frozenset({"entry_trim", "exit_trim", "no_hand", "inactive_device"})
+
 # Quaternions from drivers are normalised in float64; anything further than this from
 # unit norm was not produced as a rotation.
 UNIT_QUATERNION_TOLERANCE = 1e-3
@@ -129,6 +132,7 @@ class Sequencer:
         self.binder = DeviceBinder(self.config.device_priorities, self.config.device_timeout_s,
                                    self.config.active_device)
         self.counters = Counter()
+        self.unexpected_drops = 0  # drops for bad or late input, worth a warning
         self._last_stamp: Dict[str, float] = {}
         self._last_command_stamp = None
         self._hand_key = None
@@ -213,6 +217,8 @@ class Sequencer:
 
     def _drop(self, reason: str) -> None:
         self.counters["dropped_" + reason] += 1
+        if reason not in EXPECTED_DROPS:
+            self.unexpected_drops += 1
         return None
 
     def _timing_problem(self, device: str, stamp: float, now: float) -> Optional[str]:
