@@ -83,10 +83,21 @@ class OneEuroFilter:
     """The One Euro filter (Casiez, Roussel, Vogel, CHI 2012) for a pose.
 
     A low-pass whose cutoff rises with speed: ``mincutoff`` (Hz) sets the smoothing when
-    still, ``beta`` (s/m for positions) how fast the cutoff opens with speed, ``dcutoff``
-    (Hz) the smoothing of the speed estimate. The rate comes from the stamps, so irregular
-    frame gaps are handled. Orientation uses the same scheme on the unit sphere (slerp
-    toward the new sample, cutoff opened by the angular speed in rad/s, ``beta_rot``).
+    still, ``beta`` (Hz per m/s) how fast the cutoff opens with speed, ``dcutoff`` (Hz) the
+    smoothing of the speed estimate. The rate comes from the stamps, so irregular frame
+    gaps are handled. Orientation uses the same scheme on the unit sphere (slerp toward the
+    new sample, cutoff opened by the angular speed in rad/s, ``beta_rot``).
+
+    ``speed_threshold`` (m/s) is the speed the cutoff starts to open at:
+    ``cutoff = mincutoff + beta * max(0, speed - speed_threshold)``; the classic filter is
+    ``speed_threshold=0``. Why: a hand held "still" is not still. Its tremor and drift
+    read 0.02 m/s median and 0.04-0.06 m/s at the 90th-99th percentile on the still
+    recordings, while a wave, a flap or a paddle reads 0.12-0.21 m/s median. In the
+    classic filter a beta large enough to follow a real move also opens the cutoff on a
+    still hand and lets the tremor through. With the threshold the filter is a fixed ``mincutoff`` low-pass below it and
+    opens fast above it: on the recordings this gives about a quarter of mean-10's lag at
+    its jitter (bench/filter_bench.py). Raise it for an operator whose still hand trembles
+    more. Slow moves below it are followed with the ``mincutoff`` time constant.
 
     ``deadband`` (m, default 0 = off) adds a hysteresis stage after the low-pass: the
     output moves only by what the filtered position exceeds that radius around it, so a
@@ -95,22 +106,27 @@ class OneEuroFilter:
     """
 
     # Defaults from bench/filter_bench.py on the real recordings: steadier than mean-10
-    # (0.37 vs 0.44 mm jitter) with about half its lag (5.4 vs 9.8 mm).
-    def __init__(self, mincutoff: float = 1.0, beta: float = 40.0, dcutoff: float = 0.3, beta_rot: float = 0.5,
-                 deadband: float = 0.0):
+    # with about a quarter of its lag on the tuning recordings, and steadier with about
+    # half its lag on held-out ones (figures in bench/results/filter_bench.json).
+    def __init__(self, mincutoff: float = 3.0, beta: float = 1280.0, dcutoff: float = 1.0, beta_rot: float = 0.5,
+                 deadband: float = 0.0, speed_threshold: float = 0.08):
         for name, value in (("mincutoff", mincutoff), ("dcutoff", dcutoff)):
             if not value > 0:
                 raise MotionSensorError(f"one_euro {name} must be > 0 Hz, got {value!r}")
-        if beta < 0 or beta_rot < 0 or deadband < 0:
-            raise MotionSensorError("one_euro beta, beta_rot and deadband must be >= 0")
+        for name, value in (("beta", beta), ("beta_rot", beta_rot), ("deadband", deadband),
+                            ("speed_threshold", speed_threshold)):
+            if not value >= 0:
+                raise MotionSensorError(f"one_euro {name} must be >= 0, got {value!r}")
         self.mincutoff, self.beta, self.dcutoff, self.beta_rot = mincutoff, beta, dcutoff, beta_rot
         self.deadband = float(deadband)
+        self.speed_threshold = float(speed_threshold)
         self.reset()
 
     def reset(self) -> None:
         """Forget all history."""
         self._stamp = None
         self._position = None
+        self._last_input = None
         self._velocity = np.zeros(3)
         self._orientation = None
         self._angular_speed = 0.0
@@ -132,16 +148,22 @@ class OneEuroFilter:
         orientation = np.asarray(orientation, dtype=float)
         if self._stamp is None:
             self._stamp, self._position, self._orientation = stamp, position.copy(), orientation.copy()
+            self._last_input = position.copy()
             return self._hysteresis(), self._orientation.copy()
         dt = stamp - self._stamp
         if dt <= 0:
             return self._hysteresis(), self._orientation.copy()
         self._stamp = stamp
         # Position: filtered speed opens the cutoff.
-        raw_velocity = (position - self._position) / dt
+        # Speed from consecutive inputs, as in Casiez and Roussel's reference code (the
+        # paper's pseudocode uses the previous output): with a low mincutoff the output
+        # trails a still hand's drift, and that trail would read as speed.
+        raw_velocity = (position - self._last_input) / dt
+        self._last_input = position.copy()
         a_d = _smoothing_factor(dt, self.dcutoff)
         self._velocity = a_d * raw_velocity + (1 - a_d) * self._velocity
-        cutoff = self.mincutoff + self.beta * float(np.linalg.norm(self._velocity))
+        speed = float(np.linalg.norm(self._velocity))
+        cutoff = self.mincutoff + self.beta * max(0.0, speed - self.speed_threshold)
         a = _smoothing_factor(dt, cutoff)
         self._position = a * position + (1 - a) * self._position
         # Orientation: the same on the sphere.
@@ -153,57 +175,138 @@ class OneEuroFilter:
         return self._hysteresis(), self._orientation.copy()
 
 
-class KalmanFilter:
-    """Constant-velocity Kalman filter (filterpy) on the position, per frame dt from stamps.
+def _gaussian_log_density(residual: np.ndarray, covariance: np.ndarray) -> float:
+    """log N(residual; 0, covariance) through a Cholesky factor."""
+    factor = np.linalg.cholesky(covariance)
+    whitened = np.linalg.solve(factor, residual)
+    return float(-0.5 * whitened @ whitened - np.sum(np.log(np.diag(factor)))
+                 - 0.5 * len(residual) * np.log(2.0 * np.pi))
 
-    ``process_noise`` is the white-noise acceleration spectral density (m^2/s^3),
-    ``measurement_noise`` the position noise (m, standard deviation). Orientation has no
-    velocity model here; it is smoothed on the sphere as in OneEuroFilter (``mincutoff``,
-    ``beta_rot``).
+
+_KALMAN_CLASS = None
+
+
+def _kalman_class():
+    """filterpy's KalmanFilter with a faster measurement likelihood.
+
+    The IMM asks each model for its likelihood every frame; filterpy computes it with
+    scipy.stats.multivariate_normal, which costs more than the whole filter step (it
+    checks and decomposes the covariance generically). The innovation covariance here is
+    a 3x3 positive-definite matrix, so a Cholesky factor gives the same number in a
+    fraction of the time; should it ever fail, filterpy's own path is used.
+    """
+    global _KALMAN_CLASS
+    if _KALMAN_CLASS is None:
+        from filterpy.kalman import KalmanFilter as FilterPyKalman
+
+        class _FastLikelihoodKalman(FilterPyKalman):
+            @property
+            def log_likelihood(self):
+                if self._log_likelihood is None:
+                    try:
+                        self._log_likelihood = _gaussian_log_density(np.ravel(self.y), self.S)
+                    except np.linalg.LinAlgError:
+                        return FilterPyKalman.log_likelihood.fget(self)
+                return self._log_likelihood
+
+        _KALMAN_CLASS = _FastLikelihoodKalman
+    return _KALMAN_CLASS
+
+
+class KalmanFilter:
+    """Constant-velocity Kalman filter (filterpy) on the position, per frame dt from stamps,
+    by default as an interacting multiple model (IMM) of a steady and a manoeuvring hand.
+
+    ``process_noise`` is the white-noise acceleration spectral density (m^2/s^3) of the
+    steady model, ``measurement_noise`` the position noise (m, standard deviation) the
+    filter assumes. ``maneuver_process_noise`` (m^2/s^3) is that of the manoeuvring model;
+    0 gives the plain single-model CV filter. ``switch_probability`` is the chance per
+    frame that the hand changes between the two.
+
+    Why two models: a single CV filter has one fixed gain, so it either passes the tremor
+    of a still hand or lags a real move (on the recordings it is no better than mean-10).
+    The IMM weighs the two models by how well each predicts the new frame: tremor fits the
+    steady model, which treats it as noise (hence a measurement noise of millimetres, not
+    the sensor's 0.3 mm), and a real move fits the manoeuvring one, which follows with
+    little lag. The defaults come from bench/filter_bench.py.
+
+    Orientation has no velocity model here; it is smoothed on the sphere as in
+    OneEuroFilter (``mincutoff``, ``beta_rot``).
     """
 
-    # Defaults from bench/filter_bench.py: 0.56 mm jitter, 6.3 mm lag on the recordings.
-    def __init__(self, process_noise: float = 1e-4, measurement_noise: float = 3e-4, mincutoff: float = 1.0,
-                 beta_rot: float = 0.5):
-        from filterpy.kalman import KalmanFilter as FilterPyKalman  # imported here: only this filter needs it
+    def __init__(self, process_noise: float = 1e-5, measurement_noise: float = 0.005,
+                 maneuver_process_noise: float = 10.0, switch_probability: float = 0.005,
+                 mincutoff: float = 1.0, beta_rot: float = 0.5):
         if not process_noise > 0 or not measurement_noise > 0:
             raise MotionSensorError("kalman process_noise and measurement_noise must be > 0")
+        if not maneuver_process_noise >= 0:
+            raise MotionSensorError("kalman maneuver_process_noise must be >= 0 (0 = single CV model)")
+        if not 0 < switch_probability < 0.5:
+            raise MotionSensorError(f"kalman switch_probability must be in (0, 0.5), got {switch_probability!r}")
         self.process_noise = float(process_noise)
         self.measurement_noise = float(measurement_noise)
-        self._kf = FilterPyKalman(dim_x=6, dim_z=3)
-        self._kf.H = np.hstack([np.eye(3), np.zeros((3, 3))])
-        self._kf.R = np.eye(3) * self.measurement_noise ** 2
-        self._orientation = OneEuroFilter(mincutoff=mincutoff, beta=0.0, beta_rot=beta_rot)
+        self.maneuver_process_noise = float(maneuver_process_noise)
+        self.switch_probability = float(switch_probability)
+        self._noises = [self.process_noise] + ([self.maneuver_process_noise] if self.maneuver_process_noise else [])
+        self._orientation = OneEuroFilter(mincutoff=mincutoff, beta=0.0, beta_rot=beta_rot, speed_threshold=0.0)
         self.reset()
 
     def reset(self) -> None:
         """Forget all history."""
         self._stamp = None
+        self._models = []
+        self._imm = None
         self._orientation.reset()
+
+    @property
+    def maneuver_probability(self) -> float:
+        """Probability (0..1) the IMM gives the manoeuvring model now; 0 for a single model."""
+        return float(self._imm.mu[1]) if self._imm is not None else 0.0
+
+    def _seed(self, position: np.ndarray) -> None:
+        from filterpy.kalman import IMMEstimator  # imported here: only this filter needs filterpy (slow import)
+        self._models = []
+        for _ in self._noises:
+            kf = _kalman_class()(dim_x=6, dim_z=3)
+            kf.H = np.hstack([np.eye(3), np.zeros((3, 3))])
+            kf.R = np.eye(3) * self.measurement_noise ** 2
+            kf.x = np.concatenate([position, np.zeros(3)])
+            kf.P = np.diag([self.measurement_noise ** 2] * 3 + [1.0] * 3)
+            self._models.append(kf)
+        self._imm = None
+        if len(self._models) == 2:
+            p = self.switch_probability
+            self._imm = IMMEstimator(self._models, np.array([0.9, 0.1]), np.array([[1 - p, p], [p, 1 - p]]))
 
     def update(self, stamp: float, position: np.ndarray, orientation: np.ndarray):
         """Filter one pose; return (position, orientation)."""
         position = np.asarray(position, dtype=float)
         _, filtered_orientation = self._orientation.update(stamp, position, orientation)
-        kf = self._kf
         if self._stamp is None:
-            kf.x = np.concatenate([position, np.zeros(3)])
-            kf.P = np.diag([self.measurement_noise ** 2] * 3 + [1.0] * 3)
+            self._seed(position)
             self._stamp = stamp
             return position.copy(), filtered_orientation
+        estimator = self._imm if self._imm is not None else self._models[0]
         dt = stamp - self._stamp
         if dt <= 0:
-            return kf.x[:3].copy(), filtered_orientation
+            return estimator.x[:3].copy(), filtered_orientation
         self._stamp = stamp
-        kf.F = np.eye(6)
-        kf.F[:3, 3:] = np.eye(3) * dt
-        # Continuous white-noise acceleration model discretised over dt.
-        q = self.process_noise
-        block = np.array([[dt ** 3 / 3, dt ** 2 / 2], [dt ** 2 / 2, dt]]) * q
-        kf.Q = np.kron(block, np.eye(3))
-        kf.predict()
-        kf.update(position)
-        return kf.x[:3].copy(), filtered_orientation
+        transition = np.eye(6)
+        transition[:3, 3:] = np.eye(3) * dt
+        # Continuous white-noise acceleration model discretised over this frame's dt.
+        block = np.array([[dt ** 3 / 3, dt ** 2 / 2], [dt ** 2 / 2, dt]])
+        for kf, q in zip(self._models, self._noises):
+            kf.F = transition
+            kf.Q = np.kron(block * q, np.eye(3))
+        estimator.predict()
+        estimator.update(position)
+        estimate = estimator.x[:3].copy()
+        if not np.all(np.isfinite(estimate)):
+            # Numerical breakdown (e.g. both models' likelihoods underflow after a huge
+            # accepted move): start again from the measurement rather than publish NaN.
+            self._seed(position)
+            return position.copy(), filtered_orientation
+        return estimate, filtered_orientation
 
 
 FILTERS["one_euro"] = OneEuroFilter
