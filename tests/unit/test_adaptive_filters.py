@@ -147,3 +147,17 @@ def test_fast_likelihood_matches_scipy(rng):
         residual = rng.normal(size=3)
         assert _gaussian_log_density(residual, covariance) == pytest.approx(
             multivariate_normal.logpdf(residual, cov=covariance), rel=1e-9, abs=1e-9)
+
+
+def test_kalman_loads_filterpy_when_built_not_on_the_first_frame():
+    """filterpy takes seconds to import; done on the first frame it stalled the stream until
+    the queued frames went stale (a whole session lost 76 of 348 commands that way)."""
+    import os
+    import subprocess
+    import sys
+    package_root = os.path.join(os.path.dirname(__file__), "..", "..", "src", "motion_sensor")
+    code = ("import sys; from motion_sensor.filters import make_filter; "
+            "assert 'filterpy.kalman' not in sys.modules; make_filter('kalman'); "
+            "assert 'filterpy.kalman' in sys.modules")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([package_root, os.environ.get("PYTHONPATH", "")]))
+    subprocess.run([sys.executable, "-c", code], check=True, env=env)

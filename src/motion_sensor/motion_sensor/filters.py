@@ -249,6 +249,11 @@ class KalmanFilter:
         self.switch_probability = float(switch_probability)
         self._noises = [self.process_noise] + ([self.maneuver_process_noise] if self.maneuver_process_noise else [])
         self._orientation = OneEuroFilter(mincutoff=mincutoff, beta=0.0, beta_rot=beta_rot, speed_threshold=0.0)
+        # filterpy takes seconds to import (it pulls in scipy.stats): do it now, at start-up,
+        # not on the first frame, where it would stall the stream and go stale.
+        from filterpy.kalman import IMMEstimator
+        self._imm_class = IMMEstimator
+        self._model_class = _kalman_class()
         self.reset()
 
     def reset(self) -> None:
@@ -264,10 +269,9 @@ class KalmanFilter:
         return float(self._imm.mu[1]) if self._imm is not None else 0.0
 
     def _seed(self, position: np.ndarray) -> None:
-        from filterpy.kalman import IMMEstimator  # imported here: only this filter needs filterpy (slow import)
         self._models = []
         for _ in self._noises:
-            kf = _kalman_class()(dim_x=6, dim_z=3)
+            kf = self._model_class(dim_x=6, dim_z=3)
             kf.H = np.hstack([np.eye(3), np.zeros((3, 3))])
             kf.R = np.eye(3) * self.measurement_noise ** 2
             kf.x = np.concatenate([position, np.zeros(3)])
@@ -276,7 +280,7 @@ class KalmanFilter:
         self._imm = None
         if len(self._models) == 2:
             p = self.switch_probability
-            self._imm = IMMEstimator(self._models, np.array([0.9, 0.1]), np.array([[1 - p, p], [p, 1 - p]]))
+            self._imm = self._imm_class(self._models, np.array([0.9, 0.1]), np.array([[1 - p, p], [p, 1 - p]]))
 
     def update(self, stamp: float, position: np.ndarray, orientation: np.ndarray):
         """Filter one pose; return (position, orientation)."""
