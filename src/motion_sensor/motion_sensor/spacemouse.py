@@ -1,0 +1,305 @@
+"""3Dconnexion SpaceMouse over HID (hidapi): report decoding, rate-to-pose integration and a
+reconnecting reader. No rospy here; nodes/spacemouse_driver wires it to topics.
+
+A SpaceMouse is a rate device: the cap's deflection says how fast to move, not where the
+hand is. The rest of the stack expects hand poses (hand.msg), so RateIntegrator turns the
+deflections into the pose of a virtual hand that moves at the commanded speeds, inside a
+bounded box. The teleop mapping is relative (it takes the pose at engage as reference), so
+the virtual hand's absolute place does not matter.
+
+HID reports (3Dconnexion's multi-axis controller protocol): report 1 carries translation
+x, y, z as little-endian int16 (newer receivers send rotation in the same report, 13 bytes
+in all), report 2 rotation rx, ry, rz, report 3 the button bitmap; other reports (LEDs,
+battery) are ignored. HID axes: x right, y toward the user, z down; they are turned into
+REP 103 axes of the device frame (x away from the user, y left, z up).
+"""
+import importlib
+import struct
+import threading
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .errors import MotionSensorError
+from .leap_client import Backoff
+
+# (vendor id, product id) -> model, as listed by the spacenavd project; any other device is
+# given with vendor_id/product_id.
+KNOWN_DEVICES = {
+    (0x046D, 0xC626): "SpaceNavigator",
+    (0x046D, 0xC627): "SpaceExplorer",
+    (0x046D, 0xC628): "SpaceNavigator for Notebooks",
+    (0x046D, 0xC629): "SpacePilot Pro",
+    (0x046D, 0xC62B): "SpaceMouse Pro",
+    (0x046D, 0xC62E): "SpaceMouse Wireless (cable)",
+    (0x046D, 0xC62F): "SpaceMouse Wireless (receiver)",
+    (0x046D, 0xC631): "SpaceMouse Pro Wireless (cable)",
+    (0x046D, 0xC632): "SpaceMouse Pro Wireless (receiver)",
+    (0x256F, 0xC62E): "SpaceMouse Wireless (cable)",
+    (0x256F, 0xC62F): "SpaceMouse Wireless (receiver)",
+    (0x256F, 0xC631): "SpaceMouse Pro Wireless (cable)",
+    (0x256F, 0xC632): "SpaceMouse Pro Wireless (receiver)",
+    (0x256F, 0xC633): "SpaceMouse Enterprise",
+    (0x256F, 0xC635): "SpaceMouse Compact",
+    (0x256F, 0xC652): "3Dconnexion Universal Receiver",
+}
+
+# HID (x right, y toward the user, z down) -> REP 103 (x away from the user, y left, z up).
+# A proper rotation (det +1), so it maps angular rates the same way as translations.
+HID_TO_REP103 = np.array([[0.0, -1.0, 0.0],
+                          [-1.0, 0.0, 0.0],
+                          [0.0, 0.0, -1.0]])
+
+TRANSLATION_REPORT, ROTATION_REPORT, BUTTON_REPORT = 1, 2, 3
+HID_BACKENDS = {"hidraw": "hidraw", "libusb": "hid"}  # backend -> hidapi's Python module
+
+
+@dataclass
+class SpaceMouseState:
+    """The latest deflections (raw HID counts, HID axes) and buttons (bit i = button i)."""
+
+    translation: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rotation: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    buttons: int = 0
+
+    def button(self, index: int) -> bool:
+        """Whether button ``index`` (0 = the left one) is held."""
+        return bool(self.buttons >> index & 1)
+
+
+class SpaceMouseDecoder:
+    """Decodes HID input reports into a SpaceMouseState.
+
+    ``feed`` returns True when the report changed the state, False for a report of another
+    kind (LEDs, battery); a malformed report raises MotionSensorError and leaves the state
+    as it was.
+    """
+
+    def __init__(self):
+        self.state = SpaceMouseState()
+
+    def feed(self, report: Sequence[int]) -> bool:
+        """Apply one report (report id first, as hidapi returns it)."""
+        data = bytes(report)
+        if not data:
+            raise MotionSensorError("empty HID report")
+        kind = data[0]
+        if kind == TRANSLATION_REPORT:
+            if len(data) not in (7, 13):
+                raise MotionSensorError(f"translation report of {len(data)} bytes; expected 7 or 13")
+            values = struct.unpack("<3h", data[1:7])
+            self.state.translation = np.array(values, dtype=float)
+            if len(data) == 13:  # receivers send rotation in the same report
+                self.state.rotation = np.array(struct.unpack("<3h", data[7:13]), dtype=float)
+            return True
+        if kind == ROTATION_REPORT:
+            if len(data) != 7:
+                raise MotionSensorError(f"rotation report of {len(data)} bytes; expected 7")
+            self.state.rotation = np.array(struct.unpack("<3h", data[1:7]), dtype=float)
+            return True
+        if kind == BUTTON_REPORT:
+            if len(data) < 2:
+                raise MotionSensorError("button report without a bitmap")
+            self.state.buttons = int.from_bytes(data[1:], "little")
+            return True
+        return False
+
+
+@dataclass
+class RateConfig:
+    """How deflections become motion (units in the names)."""
+
+    full_scale_counts: float = 350.0      # deflection read at the cap's end stop
+    deadzone: float = 0.08                # fraction of full scale ignored around the centre
+    response_exponent: float = 2.0        # 1 = linear; 2 = fine control near the centre
+    max_speed_mps: float = 0.15           # hand speed at full deflection
+    max_angular_speed_rps: float = 0.8    # hand turn rate at full deflection
+    workspace_half_size_m: float = 0.3    # the virtual hand stays within this box around start
+    start_position_m: tuple = (0.0, 0.0, 0.2)
+    max_step_s: float = 0.05              # longer gaps are integrated as this long
+    hold_timeout_s: float = 0.25          # a deflection not re-reported for this long is dropped
+    axis_signs: tuple = (1, 1, 1, 1, 1, 1)  # per REP 103 axis (x y z rx ry rz), to fix a device
+
+    def validate(self) -> "RateConfig":
+        """Raise MotionSensorError naming the first bad value."""
+        positive = ("full_scale_counts", "response_exponent", "max_speed_mps", "max_angular_speed_rps",
+                    "workspace_half_size_m", "max_step_s", "hold_timeout_s")
+        for name in positive:
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+                raise MotionSensorError(f"spacemouse {name} must be a finite number > 0, got {value!r}")
+        if not 0 <= self.deadzone < 1:
+            raise MotionSensorError(f"spacemouse deadzone must be in [0, 1), got {self.deadzone!r}")
+        if len(self.start_position_m) != 3 or not np.all(np.isfinite(self.start_position_m)):
+            raise MotionSensorError(f"spacemouse start_position_m must be 3 finite numbers, got {self.start_position_m!r}")
+        if len(self.axis_signs) != 6 or any(s not in (1, -1) for s in self.axis_signs):
+            raise MotionSensorError(f"spacemouse axis_signs must be six values of 1 or -1, got {self.axis_signs!r}")
+        return self
+
+
+class RateIntegrator:
+    """Integrates SpaceMouse deflections into the pose of a virtual hand.
+
+    ``update(now, state, report_age)`` advances the pose by the rates held since the last
+    call. The rates are zero when the deflection is inside the dead zone, or when the
+    device has not re-reported it for ``hold_timeout_s`` (a SpaceMouse repeats a held
+    deflection; silence means it was unplugged or the radio dropped, and a stuck rate
+    would drive the hand away).
+    """
+
+    def __init__(self, config: RateConfig = None):
+        self.config = (config or RateConfig()).validate()
+        self._signs = np.array(self.config.axis_signs, dtype=float)
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the start pose, at rest."""
+        self.position = np.array(self.config.start_position_m, dtype=float)
+        self.rotation = Rotation.identity()
+        self._last = None
+        self.velocity = np.zeros(3)
+        self.angular_velocity = np.zeros(3)
+
+    def _shape(self, counts: np.ndarray) -> np.ndarray:
+        """Deflection counts -> rate fraction in [-1, 1], dead zone and response curve applied."""
+        c = self.config
+        fraction = np.clip(counts / c.full_scale_counts, -1.0, 1.0)
+        live = np.maximum(np.abs(fraction) - c.deadzone, 0.0) / (1.0 - c.deadzone)
+        return np.sign(fraction) * live ** c.response_exponent
+
+    def rates(self, state: SpaceMouseState, report_age: float):
+        """(linear m/s, angular rad/s) in REP 103 axes for a state reported ``report_age`` s ago."""
+        if not report_age <= self.config.hold_timeout_s:  # also catches NaN
+            return np.zeros(3), np.zeros(3)
+        linear = HID_TO_REP103 @ self._shape(np.asarray(state.translation, float)) * self.config.max_speed_mps
+        angular = HID_TO_REP103 @ self._shape(np.asarray(state.rotation, float)) * self.config.max_angular_speed_rps
+        return linear * self._signs[:3], angular * self._signs[3:]
+
+    def update(self, now: float, state: SpaceMouseState, report_age: float):
+        """Advance to ``now`` (s) with the rates of ``state``; return (position, quaternion xyzw)."""
+        if self._last is None or now <= self._last:
+            self._last = now if self._last is None else self._last
+            return self.position.copy(), self.rotation.as_quat()
+        dt = min(now - self._last, self.config.max_step_s)
+        self._last = now
+        self.velocity, self.angular_velocity = self.rates(state, report_age)
+        half = self.config.workspace_half_size_m
+        start = np.array(self.config.start_position_m, dtype=float)
+        self.position = np.clip(self.position + self.velocity * dt, start - half, start + half)
+        # Angular rates are about the device's fixed axes, so the increment multiplies on the left.
+        self.rotation = Rotation.from_rotvec(self.angular_velocity * dt) * self.rotation
+        return self.position.copy(), self.rotation.as_quat()
+
+
+def find_device(hid_module, vendor_id: Optional[int] = None, product_id: Optional[int] = None):
+    """(vendor id, product id, name) of the first SpaceMouse hidapi lists, or None.
+
+    With ``vendor_id`` and ``product_id`` that device is looked for; otherwise any of
+    KNOWN_DEVICES.
+    """
+    for info in hid_module.enumerate():
+        key = (info["vendor_id"], info["product_id"])
+        if vendor_id is not None and product_id is not None:
+            if key == (vendor_id, product_id):
+                return key[0], key[1], info.get("product_string") or "SpaceMouse"
+        elif key in KNOWN_DEVICES:
+            return key[0], key[1], KNOWN_DEVICES[key]
+    return None
+
+
+class SpaceMouseReader:
+    """Reads HID reports from a SpaceMouse through hidapi, reconnecting with backoff.
+
+    ``on_report(report, received_time)`` gets every input report, ``on_connect(name)`` each
+    opened device, ``on_problem(text)`` every connection problem. ``hid_module`` is hidapi's ``hid`` module (a stand-in in
+    tests). ``run`` blocks until ``stop``.
+    """
+
+    def __init__(self, on_report: Callable, on_problem: Callable = None, vendor_id: Optional[int] = None,
+                 product_id: Optional[int] = None, hid_module=None, backoff: Backoff = None,
+                 clock: Callable[[], float] = time.time, read_timeout_ms: int = 50,
+                 on_connect: Callable = None, backend: str = "hidraw"):
+        if hid_module is None:
+            if backend not in HID_BACKENDS:
+                raise MotionSensorError(f"unknown HID backend {backend!r}; choose one of {sorted(HID_BACKENDS)}")
+            # Imported here so that decoding and the tests need no HID library.
+            hid_module = importlib.import_module(HID_BACKENDS[backend])
+        self.hid = hid_module
+        self.on_report = on_report
+        self.on_problem = on_problem or (lambda text: None)
+        self.on_connect = on_connect or (lambda name: None)
+        self.vendor_id, self.product_id = vendor_id, product_id
+        self.backoff = backoff or Backoff()
+        self.clock = clock
+        self.read_timeout_ms = int(read_timeout_ms)
+        self.counters = Counter()
+        self.device_name = ""
+        self._stop = threading.Event()
+
+    def stop(self) -> None:
+        """Make ``run`` return."""
+        self._stop.set()
+
+    def _open(self):
+        found = find_device(self.hid, self.vendor_id, self.product_id)
+        if found is None:
+            wanted = (f"{self.vendor_id:04x}:{self.product_id:04x}" if self.vendor_id is not None
+                      else "any known SpaceMouse")
+            raise OSError(f"no HID device {wanted} (is it plugged in, and readable: see the README's udev rule?)")
+        device = self.hid.device()
+        device.open(found[0], found[1])
+        self.device_name = found[2]
+        return device
+
+    def run(self) -> None:
+        """Read until stopped; reconnect with backoff after any HID error."""
+        while not self._stop.is_set():
+            device = None
+            try:
+                device = self._open()
+                self.counters["connections"] += 1
+                self.backoff.reset()
+                self.on_connect(self.device_name)
+                while not self._stop.is_set():
+                    report = device.read(64, self.read_timeout_ms)
+                    if report:
+                        self.counters["reports"] += 1
+                        self.on_report(report, self.clock())
+            except (OSError, ValueError) as exc:  # hidapi raises OSError/IOError on unplug
+                self.counters["connection_errors"] += 1
+                self.on_problem(f"SpaceMouse: {exc}; retrying")
+                self._stop.wait(self.backoff.next())
+            finally:
+                if device is not None:
+                    device.close()
+
+
+def read_report_log(path: str):
+    """[(seconds, report bytes)] from a report log: lines "SECONDS HEX", '#' comments.
+
+    Report logs replay a SpaceMouse without the device (spacemouse_driver ~report_log), and
+    ``~record_reports`` writes them from a real one.
+    """
+    rows = []
+    with open(path, encoding="utf-8") as fh:
+        for number, line in enumerate(fh, 1):
+            line = line.split("#", 1)[0].strip()
+            if not line:
+                continue
+            try:
+                stamp, text = line.split()
+                rows.append((float(stamp), bytes.fromhex(text)))
+            except ValueError:
+                raise MotionSensorError(f"{path}:{number}: expected 'SECONDS HEXBYTES', got {line!r}") from None
+    if any(b[0] < a[0] for a, b in zip(rows, rows[1:])):
+        raise MotionSensorError(f"{path}: times must not go backwards")
+    return rows
+
+
+def format_report_line(seconds: float, report: Sequence[int]) -> str:
+    """One report-log line (see read_report_log)."""
+    return f"{seconds:.4f} {bytes(report).hex()}\n"
