@@ -15,6 +15,7 @@ a speed-adaptive filter smooths most.
 Run: bench/run filter_bench
 Writes bench/results/filter_bench.json and bench/results/filter_tradeoff.png.
 """
+import functools
 import json
 import os
 import sys
@@ -99,18 +100,25 @@ def evaluate(data, produce, still=STILL, moving=MOVING):
     return float(jitter), float(lag)
 
 
-def slow_time_lag_ms(data, filter_name, params):
-    """Time lag (ms) on slow moves: the still-hand recording plus a ramp at each speed.
+def run_default(data, filter_name, recording):
+    """Filtered positions of a recording with the filter's shipped defaults."""
+    stamps, raw, _, quats = data[recording]
+    return run_filter(filter_name, {}, stamps, raw, quats)
+
+
+def slow_time_lag_ms(data, filter_name):
+    """Time lag (ms) of a filter with its shipped defaults on slow moves: the still-hand
+    recording plus a ramp at each speed.
 
     The distance behind along the ramp, divided by its speed, over the last half of the
     recording (the tremor averages out). A speed-adaptive filter smooths most here.
     """
     stamps, raw, _, quats = data["Waiting-110fps"]
     lags = {}
+    half = len(stamps) // 2
     for speed in SLOW_SPEEDS:
         moved = raw + np.outer(speed * (stamps - stamps[0]), [1.0, 0.0, 0.0])
-        filtered = run_filter(filter_name, params or {}, stamps, moved, quats)
-        half = len(stamps) // 2
+        filtered = run_filter(filter_name, {}, stamps, moved, quats)
         lags[str(speed)] = round(float(np.mean(moved[half:, 0] - filtered[half:, 0]) / speed * 1000), 1)
     return lags
 
@@ -182,14 +190,14 @@ def check_defaults(data):
     out = {"held_out_recordings": held_out}
     rows = {"raw": lambda n: data[n][1], "leap_stabilized": lambda n: data[n][2]}
     for name in ("mean", "one_euro", "kalman"):
-        rows[name] = (lambda fname: lambda n: run_filter(fname, {}, data[n][0], data[n][1], data[n][3]))(name)
+        rows[name] = functools.partial(run_default, data, name)
     for label, produce in rows.items():
         tuned = evaluate(data, produce)
         held = evaluate(data, produce, HELD_OUT_STILL, HELD_OUT_MOVING)
         out[label] = {"tuning_jitter_mm": round(tuned[0], 4), "tuning_lag_mm": round(tuned[1], 3),
                       "held_out_jitter_mm": round(held[0], 4), "held_out_lag_mm": round(held[1], 3)}
         if label in ("mean", "one_euro", "kalman"):
-            out[label]["slow_move_time_lag_ms"] = slow_time_lag_ms(data, label, {})
+            out[label]["slow_move_time_lag_ms"] = slow_time_lag_ms(data, label)
     for label in ("one_euro", "kalman"):
         for split in ("tuning", "held_out"):
             out[label][f"{split}_lag_ratio_to_mean10"] = round(

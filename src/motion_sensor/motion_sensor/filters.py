@@ -94,10 +94,11 @@ class OneEuroFilter:
     read 0.02 m/s median and 0.04-0.06 m/s at the 90th-99th percentile on the still
     recordings, while a wave, a flap or a paddle reads 0.12-0.21 m/s median. In the
     classic filter a beta large enough to follow a real move also opens the cutoff on a
-    still hand and lets the tremor through. With the threshold the filter is a fixed ``mincutoff`` low-pass below it and
-    opens fast above it: on the recordings this gives about a quarter of mean-10's lag at
-    its jitter (bench/filter_bench.py). Raise it for an operator whose still hand trembles
-    more. Slow moves below it are followed with the ``mincutoff`` time constant.
+    still hand and lets the tremor through. With the threshold the filter is a fixed
+    ``mincutoff`` low-pass below it and opens fast above it: on the recordings this gives
+    about a quarter of mean-10's lag at its jitter (bench/filter_bench.py). Raise it for an
+    operator whose still hand trembles more. Slow moves below it are followed with the
+    ``mincutoff`` time constant.
 
     ``deadband`` (m, default 0 = off) adds a hysteresis stage after the low-pass: the
     output moves only by what the filtered position exceeds that radius around it, so a

@@ -158,7 +158,8 @@ class RateIntegrator:
 
     def reset(self) -> None:
         """Back to the start pose, at rest."""
-        self.position = np.array(self.config.start_position_m, dtype=float)
+        self._start = np.array(self.config.start_position_m, dtype=float)
+        self.position = self._start.copy()
         self.rotation = Rotation.identity()
         self._last = None
         self.velocity = np.zeros(3)
@@ -181,15 +182,15 @@ class RateIntegrator:
 
     def update(self, now: float, state: SpaceMouseState, report_age: float):
         """Advance to ``now`` (s) with the rates of ``state``; return (position, quaternion xyzw)."""
-        if self._last is None or now <= self._last:
-            self._last = now if self._last is None else self._last
+        if self._last is None:
+            self._last = now
+        if now <= self._last:
             return self.position.copy(), self.rotation.as_quat()
         dt = min(now - self._last, self.config.max_step_s)
         self._last = now
         self.velocity, self.angular_velocity = self.rates(state, report_age)
         half = self.config.workspace_half_size_m
-        start = np.array(self.config.start_position_m, dtype=float)
-        self.position = np.clip(self.position + self.velocity * dt, start - half, start + half)
+        self.position = np.clip(self.position + self.velocity * dt, self._start - half, self._start + half)
         # Angular rates are about the device's fixed axes, so the increment multiplies on the left.
         self.rotation = Rotation.from_rotvec(self.angular_velocity * dt) * self.rotation
         return self.position.copy(), self.rotation.as_quat()
