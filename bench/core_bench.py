@@ -18,7 +18,7 @@ for package in ("motion_sensor", "motion_commander"):
     sys.path.insert(0, os.path.join(ROOT, "src", package))
 
 from bench_common import RESULTS, write_results  # noqa: E402
-from motion_commander.kinematics import RobotKinematics  # noqa: E402
+from motion_common.kinematics import RobotKinematics  # noqa: E402
 from motion_commander.teleop import TeleopMapper, make_clutch  # noqa: E402
 from motion_commander.teleop_core import SafetyConfig, TeleopCore  # noqa: E402
 from motion_sensor.leap_v6 import frame_to_sample, read_recording  # noqa: E402

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Write the simplified robot models shipped in src/motion_commander/urdf: UR5e, UR10e and
+"""Write the simplified robot models shipped in src/motion_common/urdf: UR5e, UR10e and
 the Staubli TX90 of the paper.
 
 The kinematics are the manufacturers' standard DH parameters (Universal Robots publish
@@ -153,7 +153,7 @@ def generate(name, p):
 
 
 if __name__ == "__main__":
-    target = os.path.join(os.path.dirname(__file__), "..", "src", "motion_commander", "urdf")
+    target = os.path.join(os.path.dirname(__file__), "..", "src", "motion_common", "urdf")
     for robot_name, params in ROBOTS.items():
         path = os.path.join(target, f"{robot_name}.urdf")
         with open(path, "w", encoding="utf-8") as fh:

@@ -8,14 +8,14 @@ import pytest
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 # The pure-Python packages import straight from the source tree, so the unit tests need
 # neither a built workspace nor ROS environment variables.
-for package in ("motion_sensor", "motion_commander", "hw_interface"):
+for package in ("motion_common", "motion_sensor", "motion_commander", "hw_interface"):
     path = os.path.join(ROOT, "src", package)
     if path not in sys.path:
         sys.path.insert(0, path)
 
 DATA = os.path.join(ROOT, "tests", "data")
-UR5E = os.path.join(ROOT, "src", "motion_commander", "urdf", "ur5e.urdf")
-UR10E = os.path.join(ROOT, "src", "motion_commander", "urdf", "ur10e.urdf")
+UR5E = os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf")
+UR10E = os.path.join(ROOT, "src", "motion_common", "urdf", "ur10e.urdf")
 HOME = np.array([0.0, -np.pi / 2, np.pi / 2, -np.pi / 2, -np.pi / 2, 0.0])
 
 

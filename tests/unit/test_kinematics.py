@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from conftest import HOME, UR10E, UR5E
-from motion_commander.errors import MotionCommanderError
-from motion_commander.kinematics import RobotKinematics, pose_to_se3, se3_to_pose
+from motion_common.errors import RobotModelError
+from motion_common.kinematics import RobotKinematics, pose_to_se3, se3_to_pose
 
 
 @pytest.fixture(scope="module")
@@ -67,9 +67,9 @@ def test_pose_conversions_round_trip():
 
 
 def test_bad_model_inputs_are_explained(tmp_path):
-    with pytest.raises(MotionCommanderError, match="does not exist"):
+    with pytest.raises(RobotModelError, match="does not exist"):
         RobotKinematics(str(tmp_path / "none.urdf"))
-    with pytest.raises(MotionCommanderError, match="no frame"):
+    with pytest.raises(RobotModelError, match="no frame"):
         RobotKinematics(UR5E, tool_frame="gripper_tip")
 
 

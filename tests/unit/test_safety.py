@@ -4,7 +4,7 @@ import pytest
 
 from conftest import HOME, UR5E
 from motion_commander.errors import MotionCommanderError
-from motion_commander.kinematics import RobotKinematics
+from motion_common.kinematics import RobotKinematics
 from motion_commander.safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard,
                                      StaleCommandWatchdog, WorkspaceFence, condition_number)
 from motion_commander.teleop import ButtonClutch, GestureClutch, TeleopMapper, make_clutch

@@ -5,7 +5,7 @@ from scipy.spatial.transform import Rotation
 
 from conftest import HOME, UR5E
 from motion_commander.errors import MotionCommanderError
-from motion_commander.kinematics import RobotKinematics
+from motion_common.kinematics import RobotKinematics
 from motion_commander.safety import JointStepLimiter
 from motion_commander.teleop import AutoClutch, TeleopMapper
 from motion_commander.teleop_core import Action, SafetyConfig, TeleopCore, TeleopStatus

@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from motion_commander.kinematics import RobotKinematics
+from motion_common.kinematics import RobotKinematics
 
 from .ur_driver import pose_to_ur
 
@@ -100,7 +100,7 @@ class _FakeControl(_FakeInterface):
         self.fake.record("moveL", list(pose), speed, acceleration, asynchronous)
         if self.fake.protective_stopped:
             return False
-        from motion_commander.kinematics import pose_to_se3
+        from motion_common.kinematics import pose_to_se3
         from scipy.spatial.transform import Rotation
         target = pose_to_se3(pose[:3], Rotation.from_rotvec(pose[3:]).as_quat())
         result = self.fake.kinematics.solve_ik(target, self.fake.q)

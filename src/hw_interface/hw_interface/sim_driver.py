@@ -10,7 +10,7 @@ import pybullet
 from pybullet_utils import bullet_client
 from scipy.spatial.transform import Rotation, Slerp
 
-from motion_commander.kinematics import RobotKinematics, pose_to_se3
+from motion_common.kinematics import RobotKinematics, pose_to_se3
 
 from .errors import HwInterfaceError
 from .protocol import Result

@@ -16,7 +16,7 @@ from typing import Optional
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from motion_commander.kinematics import RobotKinematics
+from motion_common.kinematics import RobotKinematics
 
 from .errors import HwInterfaceError
 from .protocol import Result

@@ -11,7 +11,7 @@ from typing import Optional
 import numpy as np
 
 from .errors import MotionCommanderError
-from .kinematics import matrix_to_quat, quat_to_matrix
+from motion_common.kinematics import matrix_to_quat, quat_to_matrix
 
 
 class TeleopMapper:

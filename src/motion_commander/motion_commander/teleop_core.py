@@ -10,7 +10,7 @@ from typing import Optional
 
 import numpy as np
 
-from .kinematics import RobotKinematics, pose_to_se3, slerp
+from motion_common.kinematics import RobotKinematics, pose_to_se3, slerp
 from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
                      WorkspaceFence, condition_number)
 from .teleop import AutoClutch, TeleopMapper

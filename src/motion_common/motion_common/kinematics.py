@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .errors import MotionCommanderError
+from .errors import RobotModelError
 
 
 def pose_to_se3(position, orientation) -> pin.SE3:
@@ -58,16 +58,16 @@ class RobotKinematics:
 
     def __init__(self, urdf_path: str, tool_frame: str = "tool0"):
         if not os.path.isfile(urdf_path):
-            raise MotionCommanderError(f"URDF file {urdf_path!r} does not exist; pass the path of the robot's URDF")
+            raise RobotModelError(f"URDF file {urdf_path!r} does not exist; pass the path of the robot's URDF")
         try:
             self.model = pin.buildModelFromUrdf(urdf_path)
         except (RuntimeError, ValueError) as exc:
-            raise MotionCommanderError(f"pinocchio cannot load URDF {urdf_path!r}: {exc}") from None
+            raise RobotModelError(f"pinocchio cannot load URDF {urdf_path!r}: {exc}") from None
         if not self.model.existFrame(tool_frame):
             frames = [f.name for f in self.model.frames]
-            raise MotionCommanderError(f"URDF {urdf_path!r} has no frame {tool_frame!r}; its frames are {frames}")
+            raise RobotModelError(f"URDF {urdf_path!r} has no frame {tool_frame!r}; its frames are {frames}")
         if self.model.nq != self.model.nv:
-            raise MotionCommanderError("only arms of revolute/prismatic joints are supported (nq != nv)")
+            raise RobotModelError("only arms of revolute/prismatic joints are supported (nq != nv)")
         self.urdf_path = urdf_path
         self.data = self.model.createData()
         self.tool_frame = tool_frame
