@@ -149,13 +149,33 @@ def test_no_joint_step_above_the_limits_at_engage():
 
 def test_teleop_config_is_checked_with_the_file_named():
     from motion_commander.config import load_teleop_config
+    from motion_common.errors import ParameterError
     config = load_teleop_config({"speed_ratio": 0.5, "engage": "gesture", "joint_acceleration": 30.0,
                                  "workspace_lower": [-1, -1, 0], "input": "pose"}, "my.yaml")
     assert config.speed_ratio == 0.5 and config.safety.joint_acceleration == 30.0
     for bad, fragment in [({"speed_ratio": -1}, "speed_ratio"), ({"engage": "psychic"}, "engage"),
-                          ({"joint_speed_scale": 1.5}, "fraction"), ({"stale_timout_s": 0.1}, "unknown"),
+                          ({"joint_speed_scale": 1.5}, "joint_speed_scale"), ({"stale_timout_s": 0.1}, "unknown"),
                           ({"workspace_lower": [0, 0]}, "workspace_lower"), ({"input": "udp"}, "input"),
                           ({"singularity_slowdown": 90.0}, "singularity")]:
-        with pytest.raises(MotionCommanderError, match=fragment) as err:
+        with pytest.raises(ParameterError, match=fragment) as err:
             load_teleop_config(bad, "my.yaml")
         assert "my.yaml" in str(err.value)
+
+
+def test_teleop_config_unknown_key_lists_the_valid_keys():
+    from motion_commander.config import load_teleop_config
+    from motion_common.errors import ParameterError
+    with pytest.raises(ParameterError) as err:
+        load_teleop_config({"stale_timout_s": 0.1}, "teleop.yaml")
+    text = str(err.value)
+    assert "teleop.yaml" in text and "'stale_timout_s'" in text and "stale_timeout_s" in text
+
+
+def test_shipped_teleop_yaml_validates():
+    import os
+    import yaml
+    from motion_commander.config import load_teleop_config
+    path = os.path.join(os.path.dirname(__file__), "..", "..", "src", "motion_commander", "config", "teleop.yaml")
+    with open(path, encoding="utf-8") as stream:
+        config = load_teleop_config(yaml.safe_load(stream), path)
+    assert config.safety.stale_timeout_s == 0.1 and config.safety.joint_acceleration == 80.0

@@ -1,13 +1,14 @@
 """Teleop parameters: defaults, units and start-up checks (as moveit_servo does).
 
-Every parameter lives in config/teleop.yaml with its unit; ``load_teleop_config`` checks
-them once at start-up and names the file and key of anything wrong.
+Every parameter lives in config/teleop.yaml with its unit; ``TELEOP_PARAMETERS`` declares
+them for the framework's one validator (motion_common.params), and ``load_teleop_config``
+checks them once at start-up, naming the file and key of anything wrong.
 """
 from dataclasses import dataclass, field, fields
 
-import numpy as np
+from motion_common.errors import ParameterError
+from motion_common.params import Param, ParamSchema
 
-from .errors import MotionCommanderError
 from .teleop_core import SafetyConfig
 
 
@@ -27,70 +28,59 @@ class TeleopConfig:
     safety: SafetyConfig = field(default_factory=SafetyConfig)
 
 
-_POSITIVE = {"speed_ratio", "lost_after", "stale_timeout_s", "joint_speed_scale", "singularity_slowdown",
-             "singularity_halt"}
-_NON_NEGATIVE = {"joint_limit_margin", "engage_ramp_s"}
-
-
-def _convert(name, default, value, source):
-    where = f"{source}: parameter '{name}'"
-    if isinstance(default, bool):
-        if not isinstance(value, bool):
-            raise MotionCommanderError(f"{where} must be true or false, got {value!r}")
-        return value
-    if isinstance(default, int) and not isinstance(default, bool):
-        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-            raise MotionCommanderError(f"{where} must be an integer >= 1, got {value!r}")
-        return value
-    if isinstance(default, float) or (default is None and name == "joint_acceleration"):
-        if value is None and default is None:
-            return None
-        if not isinstance(value, (int, float)) or isinstance(value, bool) or not np.isfinite(value):
-            raise MotionCommanderError(f"{where} must be a finite number, got {value!r}")
-        if name in _POSITIVE and value <= 0 or name in _NON_NEGATIVE and value < 0:
-            raise MotionCommanderError(f"{where} must be {'> 0' if name in _POSITIVE else '>= 0'}, got {value!r}")
-        if name == "joint_speed_scale" and value > 1:
-            raise MotionCommanderError(f"{where} is a fraction of the rated joint speed: (0, 1], got {value!r}")
-        return float(value)
-    if isinstance(default, list):
-        if not isinstance(value, list) or len(value) != len(default) or \
-                not all(isinstance(v, (int, float)) and np.isfinite(v) for v in value):
-            raise MotionCommanderError(f"{where} must be a list of {len(default)} finite numbers, got {value!r}")
-        return [float(v) for v in value]
-    if isinstance(default, str):
-        if not isinstance(value, str):
-            raise MotionCommanderError(f"{where} must be a string, got {value!r}")
-        return value
-    return value
+_MAPPING = [
+    Param("tool_frame", "tool0", doc="URDF frame that follows the hand"),
+    Param("input", "stamped", choices=("stamped", "pose"),
+          doc="stamped: /motion_states_stamped (sensor stamp kept); pose: /motion_states from any source"),
+    Param("speed_ratio", 1.0, "m/m", "tool motion per hand motion", low=0.0, high=10.0, low_open=True),
+    Param("follow_orientation", True, doc="rotate the tool with the hand"),
+    Param("hand_to_robot_rpy", [0.0, 0.0, 0.0], "rad", "device frame orientation in the base frame",
+          length=3, low=-6.3, high=6.3),
+    Param("registration_file", "", doc="register_device YAML; its rotation replaces hand_to_robot_rpy"),
+    Param("engage", "auto", choices=("auto", "gesture", "button"), doc="clutch mode"),
+    Param("steady_frames", 10, "frames", "steady tracking before engage", low=1, high=1000),
+    Param("lost_after", 0.2, "s", "without a frame before disengage", low=0.0, high=10.0, low_open=True),
+]
+_SAFETY = [
+    Param("joint_speed_scale", 0.5, "fraction", "of the URDF joint velocity limits", low=0.0, high=1.0,
+          low_open=True),
+    Param("joint_acceleration", None, "rad/s^2", "change of commanded joint velocity (empty: unlimited)",
+          kind=float, low=0.0, high=1000.0, low_open=True, nullable=True),
+    Param("joint_limit_margin", 0.05, "rad", "kept clear of every joint limit", low=0.0, high=0.5),
+    Param("singularity_slowdown", 40.0, "condition number", "motion toward a singularity slows here",
+          low=1.0, high=1e6),
+    Param("singularity_halt", 80.0, "condition number", "motion toward a singularity stops here",
+          low=1.0, high=1e6),
+    Param("workspace_lower", [-1.5, -1.5, 0.0], "m", "tool target box, base frame", length=3, low=-10, high=10),
+    Param("workspace_upper", [1.5, 1.5, 1.5], "m", "tool target box, base frame", length=3, low=-10, high=10),
+    Param("floor_z", 0.0, "m", "the tool target never goes below this height", low=-10.0, high=10.0),
+    Param("engage_ramp_s", 0.3, "s", "speed ramps from 0 after engage or resume", low=0.0, high=10.0),
+    Param("stale_timeout_s", 0.1, "s", "without a fresh command before the robot is halted", low=0.0, high=5.0,
+          low_open=True),
+]
+_NODE = [
+    Param("urdf", "", doc="robot URDF path (set by the launch file)"),
+    Param("ready_timeout_s", 60.0, "s", "how long to wait for the robot server before giving up", low=0.0,
+          high=3600.0, low_open=True),
+]
+#: Every parameter of the motion_commander node, with units and ranges.
+TELEOP_PARAMETERS = ParamSchema(_MAPPING + _SAFETY + _NODE, ignore=("config_file",))
+_SAFETY_NAMES = {param.name for param in _SAFETY}
 
 
 def load_teleop_config(params: dict, source: str = "teleop.yaml") -> TeleopConfig:
     """Validate a parameter dict (the node's private params) into a TeleopConfig.
 
     Unknown keys are refused too: a typo must not silently leave a safety default in force.
+    Raises ParameterError naming ``source`` and the key.
     """
-    config = TeleopConfig()
-    safety = SafetyConfig()
-    top = {f.name for f in fields(TeleopConfig)} - {"safety"}
-    safety_names = {f.name for f in fields(SafetyConfig)}
-    ignored = {"urdf", "config_file"}
-    for name, value in params.items():
-        if name in top:
-            setattr(config, name, _convert(name, getattr(TeleopConfig(), name), value, source))
-        elif name in safety_names:
-            setattr(safety, name, _convert(name, getattr(SafetyConfig(), name), value, source))
-        elif name not in ignored:
-            known = sorted(top | safety_names)
-            raise MotionCommanderError(f"{source}: unknown parameter '{name}'; known parameters: {known}")
-    if config.input not in ("stamped", "pose"):
-        raise MotionCommanderError(f"{source}: parameter 'input' must be stamped or pose, got {config.input!r}")
-    if config.engage not in ("auto", "gesture", "button"):
-        raise MotionCommanderError(f"{source}: parameter 'engage' must be auto, gesture or button, "
-                                   f"got {config.engage!r}")
+    values = TELEOP_PARAMETERS.validate(params, source)
+    config = TeleopConfig(**{f.name: values[f.name] for f in fields(TeleopConfig) if f.name != "safety"})
+    config.safety = SafetyConfig(**{name: values[name] for name in _SAFETY_NAMES})
+    safety = config.safety
     if safety.singularity_slowdown >= safety.singularity_halt:
-        raise MotionCommanderError(f"{source}: singularity_slowdown ({safety.singularity_slowdown}) must be "
-                                   f"below singularity_halt ({safety.singularity_halt})")
-    if np.any(np.asarray(safety.workspace_lower) >= np.asarray(safety.workspace_upper)):
-        raise MotionCommanderError(f"{source}: workspace_lower must be below workspace_upper on every axis")
-    config.safety = safety
+        raise ParameterError(f"{source}: singularity_slowdown ({safety.singularity_slowdown}) must be "
+                             f"below singularity_halt ({safety.singularity_halt})")
+    if any(low >= high for low, high in zip(safety.workspace_lower, safety.workspace_upper)):
+        raise ParameterError(f"{source}: workspace_lower must be below workspace_upper on every axis")
     return config

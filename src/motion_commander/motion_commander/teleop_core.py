@@ -126,14 +126,17 @@ class TeleopCore:
         """Periodic check (>= 50 Hz): hand lost, or stale commands."""
         if not self.mapper.engaged:
             return Action.NONE
-        if self.clutch.hand_lost(now):
-            self.disengage()
-            return Action.DISENGAGE
+        # Stale input first: when a late tick finds both expired (a busy machine), the
+        # robot is halted for staleness now and the clutch opens on the next tick, so the
+        # halt never waits behind the hand-lost logic.
         if self.watchdog.expired(now):
             self.watchdog.clear()
             self._halted = True
             self.status = TeleopStatus.STALE_INPUT_HALT
             return Action.HALT
+        if self.clutch.hand_lost(now):
+            self.disengage()
+            return Action.DISENGAGE
         return Action.NONE
 
     def on_hand_pose(self, stamp: float, position, orientation, hands_num: int = 1,
