@@ -139,12 +139,17 @@ def test_no_joint_step_above_the_limits_at_engage():
     core = make_core(joint_speed_scale=0.5, engage_ramp_s=0.3)
     max_step = core.limiter.max_velocity
     previous = HOME
+    commands = 0
     for i in range(40):  # a hand already moving fast when teleop engages
         command = core.on_hand_pose(0.01 * i, [0.01 * i, 0.0, 0.2], IDENTITY)
-        if command is None:
+        if command is None:  # the frames before the clutch engages
             continue
+        commands += 1
         assert np.all(np.abs(command.joints - previous) <= max_step * 0.01 + 1e-9)
         previous = command.joints
+    # The check must have seen the engage and the streaming after it, not nothing.
+    assert commands >= 25, f"only {commands} commands: teleop never engaged"
+    assert np.max(np.abs(previous - HOME)) > np.max(max_step) * 0.01, "the arm never moved"
 
 
 def test_teleop_config_is_checked_with_the_file_named():
