@@ -2,4 +2,4 @@
 from setuptools import setup
 from catkin_pkg.python_setup import generate_distutils_setup
 
-setup(**generate_distutils_setup(packages=["hw_interface"], package_dir={"": "."}))
+setup(**generate_distutils_setup(packages=["hw_interface", "hw_interface.testing"], package_dir={"": "."}))

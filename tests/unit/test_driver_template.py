@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import HOME, UR5E
-from hw_interface.fake_rtde import FakeUR
+from hw_interface.testing.fake_rtde import FakeUR
 from hw_interface.registry import available_drivers, create_driver
 from hw_interface.robot_hw import RobotDriver
 from hw_interface.sim_driver import PybulletSimDriver

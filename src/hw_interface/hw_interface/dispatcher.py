@@ -3,8 +3,13 @@
 A refused request never reaches the driver; the answer always carries a Result code and
 a reason the server logs. This is the logic of motion_controller_server, kept out of the
 node so it is testable without ROS.
+
+A LATCHED STOP (``latch_stop`` / ``release_stop``) reaches every client at once: the
+robot stops, a blocking move in progress answers INTERRUPTED, and every motion command
+(SET_JOINTS, MOVE_J, MOVE_L) is refused with LATCHED_STOP until it is released.
 """
 import threading
+import time
 from dataclasses import dataclass, field
 from typing import Optional, Sequence
 
@@ -40,11 +45,26 @@ class CommandResult:
     robots: Sequence = ()
 
 
+MOTION_COMMANDS = (CommandIndex.SET_JOINTS, CommandIndex.MOVE_J, CommandIndex.MOVE_L)
+
+#: How to release a latched stop, for refusal messages.
+RELEASE_HINT = ("release it with `rosservice call /motion_controller/latch_stop \"data: false\"` "
+                "(or publish False on /motion_commander/estop)")
+
+
+def stop_driver(driver: RobotDriver, reason: str) -> None:
+    """driver.stop(reason), for drivers whose stop() takes no reason too (plugins)."""
+    try:
+        driver.stop(reason=reason)
+    except TypeError:
+        driver.stop()
+
+
 class CommandDispatcher:
     """Validates and executes commander.srv requests on one driver (thread-safe)."""
 
     def __init__(self, driver: RobotDriver, workspace: Optional[Workspace] = None,
-                 max_stream_step: float = 0.2, user: str = "", password: str = ""):
+                 max_stream_step: float = 0.2, user: str = "", password: str = "", move_timeout: float = 30.0):
         self.driver = driver
         self.workspace = workspace or Workspace()
         # Largest joint change (rad) one streamed SetJoints may ask for: teleop streams
@@ -53,6 +73,67 @@ class CommandDispatcher:
         self._user = user
         self._password = password
         self._blocking_motion = threading.Lock()
+        # Longest a MOVE_J/MOVE_L may run (s) before the robot is stopped and TIMEOUT answered.
+        self.move_timeout = float(move_timeout)
+        # _gate orders the latch against motion commands: a command checks the latch and
+        # registers as in flight under it, so a latch never misses a motion starting.
+        self._gate = threading.Lock()
+        self._latched = False
+        self._latch_source = ""
+        self._in_flight = 0          # motion commands past the latch check, not yet returned
+        self._stop_epoch = 0         # increases with every STOP / latch
+
+    # -- latched stop ----------------------------------------------------------------------
+    @property
+    def latched(self) -> bool:
+        """True while a latched stop is active."""
+        return self._latched
+
+    @property
+    def latch_source(self) -> str:
+        """Who engaged the active latched stop ("" when released)."""
+        return self._latch_source
+
+    def latch_stop(self, source: str = "latch_stop") -> str:
+        """Engage the latched stop: stop the robot now, refuse motion until released."""
+        with self._gate:
+            already = self._latched
+            self._latched = True
+            if not already:
+                self._latch_source = source
+        self._stop(f"latched stop ({source})")
+        return (f"stop already latched (by {self._latch_source}); robot stopped again" if already
+                else f"stop latched by {source}: robot stopped, motion refused until released")
+
+    def release_stop(self, source: str = "latch_stop") -> str:
+        """Release the latched stop; motion commands are accepted again."""
+        with self._gate:
+            was, by = self._latched, self._latch_source
+            self._latched, self._latch_source = False, ""
+        return f"stop released by {source} (was latched by {by})" if was else "no stop was latched"
+
+    def _stop(self, reason: str) -> None:
+        """Stop the driver; while a motion command that passed the latch check is still
+        starting, stop again each few ms (bounded) so a move issued just after the first
+        stop is cut short too."""
+        with self._gate:
+            self._stop_epoch += 1
+            epoch, in_flight = self._stop_epoch, self._in_flight
+        stop_driver(self.driver, reason)
+        if in_flight:
+            threading.Thread(target=self._restop, args=(epoch, reason), name="restop", daemon=True).start()
+
+    def _restop(self, epoch, reason, window=0.1, period=0.01):
+        deadline = time.monotonic() + window
+        while time.monotonic() < deadline:
+            time.sleep(period)
+            with self._gate:
+                if self._in_flight == 0 or self._stop_epoch != epoch:
+                    return
+            try:
+                stop_driver(self.driver, reason)
+            except Exception:  # the first stop already reported; keep the server alive
+                return
 
     def handle(self, command_index: int, position=(), orientation=(), joints=(), url: str = "") -> CommandResult:
         """Run one request; never raises, every failure becomes a Result code."""
@@ -61,14 +142,30 @@ class CommandDispatcher:
         except ValueError:
             known = ", ".join(f"{c.name}={c.value}" for c in CommandIndex)
             return CommandResult(Result.UNKNOWN_COMMAND, f"unknown command_index {command_index}; known: {known}")
+        motion = command in MOTION_COMMANDS
         try:
             refusal = self._validate(command, position, orientation, joints)
             if refusal is not None:
                 return self._answer(refusal[0], refusal[1])
-            robots = self._execute(command, position, orientation, joints, url)
+            if motion:
+                with self._gate:
+                    if self._latched:
+                        return self._answer(Result.LATCHED_STOP, (
+                            f"{command.name} refused: a latched stop is active (set by {self._latch_source}); "
+                            + RELEASE_HINT))
+                    self._in_flight += 1
+            try:
+                robots = self._execute(command, position, orientation, joints, url)
+            finally:
+                if motion:
+                    with self._gate:
+                        self._in_flight -= 1
             return self._answer(Result.SUCCESS, "", robots)
         except HwInterfaceError as exc:
-            return self._answer(Result(exc.result), str(exc))
+            reason = str(exc)
+            if exc.result == Result.INTERRUPTED and self._latched:
+                reason += f"; a latched stop is active (set by {self._latch_source}): " + RELEASE_HINT
+            return self._answer(Result(exc.result), reason)
         except Exception as exc:  # a driver bug must not kill the server; report it
             return self._answer(Result.DRIVER_FAULT, f"driver error: {type(exc).__name__}: {exc}")
 
@@ -145,7 +242,7 @@ class CommandDispatcher:
         elif command == CommandIndex.SET_JOINTS:
             driver.set_joints(np.asarray(joints, dtype=float))
         elif command == CommandIndex.STOP:
-            driver.stop()
+            self._stop("STOP")
         elif command == CommandIndex.SET_GRIPPER:
             driver.set_gripper(bool(joints[0]))
         elif command == CommandIndex.SET_DIGITAL_OUTPUT:
@@ -155,9 +252,10 @@ class CommandDispatcher:
                 raise HwInterfaceError("another MOVE_J/MOVE_L is running; wait or send STOP", Result.BUSY)
             try:
                 if command == CommandIndex.MOVE_J:
-                    driver.move_j(np.asarray(joints, dtype=float))
+                    driver.move_j(np.asarray(joints, dtype=float), timeout=self.move_timeout)
                 else:
-                    driver.move_l(np.asarray(position, dtype=float), np.asarray(orientation, dtype=float))
+                    driver.move_l(np.asarray(position, dtype=float), np.asarray(orientation, dtype=float),
+                                  timeout=self.move_timeout)
             finally:
                 self._blocking_motion.release()
         return ()

@@ -39,3 +39,5 @@ class Result(enum.IntEnum):
     BUSY = 12
     TIMEOUT = 13
     BAD_ORIENTATION = 14
+    INTERRUPTED = 15    # a blocking move cut short: STOP, latched stop, fault, protective stop
+    LATCHED_STOP = 16   # refused: a latched stop is active until released

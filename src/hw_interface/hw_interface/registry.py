@@ -14,6 +14,8 @@ ENTRY_POINT_GROUP = "hw_interface.drivers"
 _BUILTIN = {
     "pybullet": "hw_interface.sim_driver:PybulletSimDriver",
     "ur_rtde": "hw_interface.ur_driver:URRtdeDriver",
+    # The UR driver on a simulated controller (dry runs, tests): injected, not a flag.
+    "ur_rtde_fake": "hw_interface.testing.fake_rtde:fake_ur_driver",
 }
 _registered: Dict[str, Callable] = {}
 
@@ -44,6 +46,11 @@ def driver_factory(name: str) -> Callable:
         if ep.name == name:
             return ep.load()
     raise HwInterfaceError(f"no robot driver named {name!r}; available: {available_drivers()}")
+
+
+def driver_parameters(name: str):
+    """The ParamSchema of driver ``name``'s driver_params, or None when it declares none."""
+    return getattr(driver_factory(name), "PARAMETERS", None)
 
 
 def create_driver(name: str, **params):

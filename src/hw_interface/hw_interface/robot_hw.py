@@ -30,6 +30,10 @@ class RobotDriver(abc.ABC):
     #: Registry name of the driver (e.g. "pybullet", "ur_rtde").
     name = ""
 
+    #: The driver's ``driver_params`` (a motion_common.params.ParamSchema, units and ranges);
+    #: None: the server passes them unchecked.
+    PARAMETERS = None
+
     @property
     @abc.abstractmethod
     def joint_names(self) -> List[str]:
@@ -66,15 +70,20 @@ class RobotDriver(abc.ABC):
 
     @abc.abstractmethod
     def move_j(self, joints: Sequence[float], timeout: float = 30.0) -> None:
-        """MoveJ: joint-interpolated motion to ``joints``; blocks until done."""
+        """MoveJ: joint-interpolated motion to ``joints``; blocks until the MEASURED joints
+        are within the driver's goal tolerance. Raises HwInterfaceError with INTERRUPTED
+        when stop(), a fault or a protective stop cuts it short, TIMEOUT (robot stopped)
+        after ``timeout`` seconds."""
 
     @abc.abstractmethod
     def move_l(self, position: Sequence[float], orientation: Sequence[float], timeout: float = 30.0) -> None:
-        """MoveL: straight-line tool motion with slerped orientation; blocks until done."""
+        """MoveL: straight-line tool motion with slerped orientation; blocks and answers as
+        move_j does."""
 
     @abc.abstractmethod
-    def stop(self) -> None:
-        """Stop any motion and streaming at once; the robot holds where it is."""
+    def stop(self, reason: str = "STOP") -> None:
+        """Stop any motion and streaming at once, from any thread; the robot holds where it
+        is and a blocking move in progress raises INTERRUPTED (naming ``reason``)."""
 
     @abc.abstractmethod
     def set_gripper(self, closed: bool) -> None:

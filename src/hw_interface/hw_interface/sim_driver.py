@@ -11,6 +11,7 @@ from pybullet_utils import bullet_client
 from scipy.spatial.transform import Rotation, Slerp
 
 from motion_common.kinematics import RobotKinematics, pose_to_se3
+from motion_common.params import Param, ParamSchema
 
 from .errors import HwInterfaceError
 from .protocol import Result
@@ -66,15 +67,41 @@ class PybulletSimDriver(UrdfModelMixin, RobotDriver):
     ``cartesian_speed`` (m/s, MoveL), ``real_time`` (False steps as fast as possible),
     ``scene`` (list of extra bodies, see load_scene), ``gripper_output`` (the digital
     output that switches the suction gripper), ``gripper_reach`` (m from the tool frame
-    within which a body is picked).
+    within which a body is picked), ``goal_tolerance`` (rad: a MoveJ/MoveL succeeds only
+    once every MEASURED joint is this close to the goal), ``settle_timeout`` (s after the
+    path's end to get there; otherwise the move fails, never a silent SUCCESS).
+
+    stop() from another thread cuts a blocking move short: it answers INTERRUPTED.
     """
 
     name = "pybullet"
 
+    PARAMETERS = ParamSchema([
+        Param("gui", False, doc="open the pybullet window (needs a display)"),
+        Param("time_step", 0.002, "s", "physics step", low=0.0001, high=0.05),
+        Param("initial_joints", None, "rad", "start pose (from motion_common/config/robots/<robot>.yaml)",
+              kind=list, nullable=True),
+        Param("speed_scale", 0.5, "1", "fraction of the URDF joint velocity limits MoveJ/MoveL use",
+              low=0.0, high=1.0, low_open=True),
+        Param("max_acceleration", 3.0, "rad/s^2", "MoveJ/MoveL joint acceleration", low=0.0, high=100.0,
+              low_open=True),
+        Param("cartesian_speed", 0.25, "m/s", "MoveL tool speed", low=0.0, high=3.0, low_open=True),
+        Param("real_time", True, doc="step in real time (false: as fast as possible)"),
+        Param("scene", [], doc="extra bodies, see hw_interface.sim_driver.load_scene", item_kind=dict),
+        Param("gripper_output", 0, "", "digital output that switches the suction gripper", low=0, high=63),
+        Param("gripper_reach", 0.02, "m", "how close a part must be to the flange to be gripped",
+              low=0.0, high=0.5),
+        Param("goal_tolerance", 0.001, "rad", "largest measured joint error for a MoveJ/MoveL SUCCESS",
+              low=0.0, high=0.1, low_open=True),
+        Param("settle_timeout", 2.0, "s", "time after the path's end allowed to come within goal_tolerance",
+              low=0.0, high=30.0, low_open=True),
+    ])
+
     def __init__(self, urdf_path: str, tool_frame: str = "tool0", gui: bool = False, time_step: float = 0.002,
                  initial_joints=None, speed_scale: float = 0.5, max_acceleration: float = 3.0,
                  cartesian_speed: float = 0.25, real_time: bool = True, robot_name: Optional[str] = None,
-                 scene=None, gripper_output: int = 0, gripper_reach: float = 0.02):
+                 scene=None, gripper_output: int = 0, gripper_reach: float = 0.02, goal_tolerance: float = 0.001,
+                 settle_timeout: float = 2.0):
         self.kinematics = RobotKinematics(urdf_path, tool_frame)
         self.urdf_path = urdf_path
         self.tool_frame = tool_frame
@@ -84,6 +111,8 @@ class PybulletSimDriver(UrdfModelMixin, RobotDriver):
         self.max_acceleration = float(max_acceleration)
         self.cartesian_speed = float(cartesian_speed)
         self.real_time = real_time
+        self.goal_tolerance = float(goal_tolerance)
+        self.settle_timeout = float(settle_timeout)
         self.robot_name = robot_name or self.kinematics.model.name
         dof = self.kinematics.dof
         self._initial = np.zeros(dof) if initial_joints is None else np.asarray(initial_joints, dtype=float)
@@ -99,6 +128,7 @@ class PybulletSimDriver(UrdfModelMixin, RobotDriver):
         self._path: Optional[JointPath] = None
         self._path_start = 0.0
         self._path_done = threading.Event()
+        self._path_outcome = None   # None: arrived; else (Result, reason) of a cut-short move
         self._sim_time = 0.0
         self._thread: Optional[threading.Thread] = None
         self._running = threading.Event()
@@ -234,14 +264,21 @@ class PybulletSimDriver(UrdfModelMixin, RobotDriver):
                        4.0 / 3.0 * trapezoid_duration(distance, self.cartesian_speed, self.max_acceleration))
         self._run_path(JointPath(waypoints, duration), timeout)
 
-    def stop(self) -> None:
+    def stop(self, reason: str = "STOP") -> None:
         with self._lock:
             if self._client is None:
                 return
             states = self._client.getJointStates(self._body, self._joint_indices)
             self._target = np.array([s[0] for s in states])
-            self._path = None
-            self._path_done.set()
+            if self._path is not None:
+                self._end_path((Result.INTERRUPTED, f"motion interrupted by {reason}; the robot stopped "
+                                                    "short of the goal"))
+
+    def _end_path(self, outcome) -> None:
+        """Finish the running path with ``outcome`` (None: arrived); caller holds the lock."""
+        self._path = None
+        self._path_outcome = outcome
+        self._path_done.set()
 
     def set_gripper(self, closed: bool) -> None:
         self.set_digital_output(self.gripper_output, closed)
@@ -308,23 +345,25 @@ class PybulletSimDriver(UrdfModelMixin, RobotDriver):
                 raise HwInterfaceError("another MoveJ/MoveL is running; wait or STOP it", Result.BUSY)
             return self._target.copy()
 
-    def _settled(self, since_end: float) -> bool:
-        """True once every joint is within 0.1 mrad of the path's end (or 1 s has passed):
-        a blocking move returns when the arm is there, as a real controller's does."""
-        if since_end >= 1.0:
-            return True
+    def _goal_error(self) -> float:
+        """Largest MEASURED joint error (rad) from the path's end (caller holds the lock)."""
         states = self._client.getJointStates(self._body, self._joint_indices)
-        return float(np.max(np.abs(np.array([s[0] for s in states]) - self._target))) < 1e-4
+        return float(np.max(np.abs(np.array([s[0] for s in states]) - self._path.end)))
 
     def _run_path(self, path: JointPath, timeout: float) -> None:
         with self._lock:
             self._require_connection()
             self._path = path
             self._path_start = self._sim_time
+            self._path_outcome = None
             self._path_done.clear()
         if not self._path_done.wait(timeout=max(timeout, 0.0)):
-            self.stop()
+            self.stop(reason="timeout")
             raise HwInterfaceError(f"motion did not finish within {timeout:.1f} s; stopped", Result.TIMEOUT)
+        with self._lock:
+            outcome = self._path_outcome
+        if outcome is not None:
+            raise HwInterfaceError(outcome[1], outcome[0])
 
     def _step_loop(self) -> None:
         next_tick = time.perf_counter()
@@ -335,9 +374,17 @@ class PybulletSimDriver(UrdfModelMixin, RobotDriver):
                 if self._path is not None:
                     elapsed = self._sim_time - self._path_start
                     self._target = self._path.sample(elapsed)
-                    if elapsed >= self._path.duration and self._settled(elapsed - self._path.duration):
-                        self._path = None
-                        self._path_done.set()
+                    if elapsed >= self._path.duration:
+                        error = self._goal_error()
+                        if error <= self.goal_tolerance:
+                            self._end_path(None)
+                        elif elapsed - self._path.duration > self.settle_timeout:
+                            self._target = np.array([s[0] for s in self._client.getJointStates(
+                                self._body, self._joint_indices)])
+                            self._end_path((Result.DRIVER_FAULT, (
+                                f"the arm did not settle within {self.settle_timeout:g} s of the path's end: "
+                                f"{error:.4f} rad from the goal (tolerance {self.goal_tolerance:g} rad); "
+                                "stopped there (blocked, or a joint limit/effort too low?)")))
                 self._client.setJointMotorControlArray(
                     self._body, self._joint_indices, pybullet.POSITION_CONTROL,
                     targetPositions=self._target.tolist(), forces=(self._efforts * 4.0).tolist(),

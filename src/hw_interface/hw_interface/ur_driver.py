@@ -6,8 +6,8 @@ Safety rules, as in the Universal Robots ROS driver:
 - streaming uses servoJ at the controller rate (500 Hz e-Series, 125 Hz CB3) and is
   stopped with servoStop before any other motion, and when targets stop arriving;
 - every exit path stops the robot (``finally``).
-It has been tested against a fake of the ur_rtde classes only (tests/unit), never against a
-controller.
+It has been tested against a fake of the ur_rtde classes only (hw_interface.testing.fake_rtde),
+never against a controller.
 """
 import threading
 import time
@@ -17,6 +17,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from motion_common.kinematics import RobotKinematics
+from motion_common.params import Param, ParamSchema
 
 from .errors import HwInterfaceError
 from .protocol import Result
@@ -49,30 +50,73 @@ def ur_to_pose(pose):
     return pose[:3], Rotation.from_rotvec(pose[3:6]).as_quat()
 
 
+def _stop_call(method, deceleration):
+    """stopJ/stopL asynchronously where ur_rtde supports it (1.5.6+), else blocking."""
+    try:
+        method(deceleration, True)
+    except TypeError:
+        method(deceleration)
+
+
 class URRtdeDriver(UrdfModelMixin, RobotDriver):
     """A Universal Robots arm over RTDE.
 
-    Parameters: ``urdf_path`` (the arm's model: joint names and limits), ``robot_ip``,
-    ``armed`` (must be True to connect), ``frequency`` (Hz: 500 e-Series, 125 CB3),
-    ``lookahead_time`` (s, 0.03-0.2) and ``gain`` (100-2000) of servoJ,
-    ``joint_speed`` (rad/s) / ``joint_acceleration`` (rad/s^2) of MoveJ,
-    ``linear_speed`` (m/s) / ``linear_acceleration`` (m/s^2) of MoveL,
-    ``stream_timeout`` (s without a new target before streaming stops),
-    ``gripper_output`` (standard digital output driving the gripper),
-    ``reconnect_attempts`` and ``reconnect_backoff`` (s, doubled each attempt),
-    ``rtde_classes`` (control, receive, io classes; tests pass fakes),
-    ``fake_controller`` (True: talk to hw_interface.fake_rtde instead of a controller, for
-    dry runs of a UR session without a robot; ``initial_joints`` sets its start pose).
+    Parameters (``PARAMETERS``, with units and ranges): ``urdf_path`` (the arm's model: joint
+    names and limits), ``robot_ip``, ``armed`` (must be True to connect), ``frequency`` (Hz:
+    500 e-Series, 125 CB3), ``lookahead_time`` (s, 0.03-0.2) and ``gain`` (100-2000) of
+    servoJ, ``joint_speed`` / ``joint_acceleration`` of MoveJ, ``linear_speed`` /
+    ``linear_acceleration`` of MoveL, the decelerations STOP uses (stopJ, stopL, servoStop),
+    ``stream_timeout``, ``gripper_output``, ``reconnect_attempts`` / ``reconnect_backoff``,
+    ``goal_tolerance`` (rad) / ``goal_position_tolerance`` (m): how close the MEASURED arm
+    must be for a move to succeed. Injected: ``rtde_classes`` (control, receive, io classes;
+    tests and the ``ur_rtde_fake`` driver pass hw_interface.testing.fake_rtde's),
+    ``clock`` and ``sleep`` (the reconnect backoff uses them; tests need no real sleeping).
+
+    Blocking MoveJ/MoveL are issued as asynchronous ur_rtde moves and watched without
+    holding the driver lock, so stop() from another thread acts within one controller
+    period: stopJ for MoveJ, stopL for MoveL, servoStop for streaming.
     """
 
     name = "ur_rtde"
 
+    PARAMETERS = ParamSchema([
+        Param("robot_ip", "", doc="controller address; empty: never connect"),
+        Param("armed", False, doc="must be true to connect and move the robot"),
+        Param("frequency", 500.0, "Hz", "servoJ rate: 500 e-Series, 125 CB3", low=10.0, high=1000.0),
+        Param("lookahead_time", 0.1, "s", "servoJ lookahead (ur_rtde range)", low=0.03, high=0.2),
+        Param("gain", 300.0, "1", "servoJ proportional gain (ur_rtde range)", low=100.0, high=2000.0),
+        Param("joint_speed", 1.0, "rad/s", "MoveJ speed of the leading joint", low=0.0, high=3.14, low_open=True),
+        Param("joint_acceleration", 1.4, "rad/s^2", "MoveJ acceleration", low=0.0, high=40.0, low_open=True),
+        Param("linear_speed", 0.25, "m/s", "MoveL tool speed", low=0.0, high=3.0, low_open=True),
+        Param("linear_acceleration", 1.2, "m/s^2", "MoveL tool acceleration", low=0.0, high=150.0, low_open=True),
+        Param("joint_stop_deceleration", 2.0, "rad/s^2", "stopJ deceleration (STOP of a MoveJ)",
+              low=0.0, high=40.0, low_open=True),
+        Param("linear_stop_deceleration", 10.0, "m/s^2", "stopL deceleration (STOP of a MoveL)",
+              low=0.0, high=150.0, low_open=True),
+        Param("servo_stop_deceleration", 10.0, "rad/s^2", "servoStop deceleration (STOP of streaming)",
+              low=0.0, high=40.0, low_open=True),
+        Param("stream_timeout", 0.1, "s", "without a new SET_JOINTS before streaming stops", low=0.0, high=5.0,
+              low_open=True),
+        Param("gripper_output", 0, "", "standard digital output driving the gripper", low=0, high=7),
+        Param("reconnect_attempts", 3, "", "connection attempts before giving up", low=1, high=20),
+        Param("reconnect_backoff", 0.5, "s", "first wait between attempts, doubled each time", low=0.0, high=10.0),
+        Param("goal_tolerance", 0.002, "rad", "largest joint error (MoveJ) / orientation error (MoveL) "
+              "of the measured arm for SUCCESS", low=0.0, high=0.1, low_open=True),
+        Param("goal_position_tolerance", 0.002, "m", "largest measured tool position error for a MoveL SUCCESS",
+              low=0.0, high=0.05, low_open=True),
+        Param("settle_time", 0.5, "s", "how long a finished move may take to come within tolerance",
+              low=0.0, high=5.0),
+    ])
+
     def __init__(self, urdf_path: str, tool_frame: str = "tool0", robot_ip: str = "", armed: bool = False,
                  frequency: float = 500.0, lookahead_time: float = 0.1, gain: float = 300.0,
                  joint_speed: float = 1.0, joint_acceleration: float = 1.4, linear_speed: float = 0.25,
-                 linear_acceleration: float = 1.2, stream_timeout: float = 0.1, gripper_output: int = 0,
-                 reconnect_attempts: int = 3, reconnect_backoff: float = 0.5, robot_name: Optional[str] = None,
-                 rtde_classes=None, fake_controller: bool = False, initial_joints=None):
+                 linear_acceleration: float = 1.2, joint_stop_deceleration: float = 2.0,
+                 linear_stop_deceleration: float = 10.0, servo_stop_deceleration: float = 10.0,
+                 stream_timeout: float = 0.1, gripper_output: int = 0, reconnect_attempts: int = 3,
+                 reconnect_backoff: float = 0.5, goal_tolerance: float = 0.002,
+                 goal_position_tolerance: float = 0.002, settle_time: float = 0.5,
+                 robot_name: Optional[str] = None, rtde_classes=None, clock=time.monotonic, sleep=time.sleep):
         if not 0.03 <= lookahead_time <= 0.2:
             raise HwInterfaceError(f"lookahead_time must be 0.03-0.2 s (ur_rtde range), got {lookahead_time}")
         if not 100 <= gain <= 2000:
@@ -84,25 +128,36 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         self.lookahead_time, self.gain = float(lookahead_time), float(gain)
         self.joint_speed, self.joint_acceleration = float(joint_speed), float(joint_acceleration)
         self.linear_speed, self.linear_acceleration = float(linear_speed), float(linear_acceleration)
+        self.joint_stop_deceleration = float(joint_stop_deceleration)
+        self.linear_stop_deceleration = float(linear_stop_deceleration)
+        self.servo_stop_deceleration = float(servo_stop_deceleration)
         self.stream_timeout = float(stream_timeout)
         self.gripper_output = int(gripper_output)
         self.reconnect_attempts = int(reconnect_attempts)
         self.reconnect_backoff = float(reconnect_backoff)
+        self.goal_tolerance = float(goal_tolerance)
+        self.goal_position_tolerance = float(goal_position_tolerance)
+        self.settle_time = float(settle_time)
         self.robot_name = robot_name or self.kinematics.model.name
         self._classes = rtde_classes
-        if fake_controller and rtde_classes is None:
-            from .fake_rtde import FakeUR
-            self._classes = FakeUR(urdf_path, initial_joints, frequency).classes()
+        self._clock = clock
+        self._sleep = sleep
         self._control = self._receive = self._io = None
-        # _lock guards the RTDE objects and the streaming state across the server's
-        # service threads and the streaming thread.
+        # _lock guards the RTDE objects and the motion/streaming state. It is only ever held
+        # for single controller calls: never across a motion, a sleep or a backoff.
         self._lock = threading.RLock()
+        self._connect_lock = threading.Lock()   # serialises login attempts (may back off)
         self._target: Optional[np.ndarray] = None
         self._target_time = 0.0
         self._stream_thread: Optional[threading.Thread] = None
         self._streaming = threading.Event()
         self._fault = ""
         self._gripper_on = False
+        self._active_move = None          # "moveJ" / "moveL" while an asynchronous move runs
+        self._move_token = 0              # increases with every move
+        self._stopped_token = 0           # the last move token a stop() cut short
+        self._stop_reason = ""
+        self._wake = threading.Event()    # wakes a watching move at once on stop()
         self.servo_periods = 0
         self.missed_periods = 0
 
@@ -115,24 +170,27 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         if not self.armed:
             raise HwInterfaceError(f"refusing to connect to the real robot at {ip}: the driver is not armed; "
                                    "check the cell is clear, then start with armed:=true", Result.LOGIN_FAILED)
-        with self._lock:
-            if self._control is not None:
-                return
+        with self._connect_lock:
+            with self._lock:
+                if self._control is not None:
+                    return
             control_cls, receive_cls, io_cls = self._classes or _rtde_classes()
             delay = self.reconnect_backoff
             for attempt in range(1, self.reconnect_attempts + 1):
                 try:
-                    self._receive = receive_cls(ip)
-                    self._control = control_cls(ip)
-                    self._io = io_cls(ip)
-                    self.robot_ip = ip
-                    self._fault = ""
+                    receive = receive_cls(ip)
+                    control = control_cls(ip)
+                    io = io_cls(ip)
+                    with self._lock:
+                        self._receive, self._control, self._io = receive, control, io
+                        self.robot_ip = ip
+                        self._fault = ""
                     return
                 except Exception as exc:  # ur_rtde raises RuntimeError; anything else is as fatal
-                    self._control = self._receive = self._io = None
-                    self._fault = f"connect to {ip} failed (attempt {attempt}): {exc}"
+                    with self._lock:
+                        self._fault = f"connect to {ip} failed (attempt {attempt}): {exc}"
                     if attempt < self.reconnect_attempts:
-                        time.sleep(delay)
+                        self._sleep(delay)   # never under the driver lock
                         delay *= 2
             raise HwInterfaceError(f"cannot connect to the UR controller at {ip}: {self._fault}", Result.LOGIN_FAILED)
 
@@ -140,6 +198,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         try:
             self.stop()
         finally:
+            self._streaming.clear()
             with self._lock:
                 for interface in (self._control, self._receive, self._io):
                     if interface is not None:
@@ -155,41 +214,53 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                 self._control = self._receive = self._io = None
 
     def _ensure_connected(self):
-        """Raise NOT_CONNECTED unless connected; reconnect with backoff after a drop."""
-        if self._control is None:
-            raise HwInterfaceError("not connected to the UR controller: call LOGIN first", Result.NOT_CONNECTED)
-        if self._control.isConnected() and self._receive.isConnected():
-            return
+        """Raise NOT_CONNECTED unless connected; reconnect with backoff after a drop.
+
+        Called WITHOUT the lock: each attempt takes it briefly, the backoff sleeps outside.
+        """
         delay = self.reconnect_backoff
-        for _ in range(self.reconnect_attempts):
-            try:
-                if self._receive.reconnect() and self._control.reconnect():
-                    self._io.reconnect()
-                    self._fault = ""
-                    return
-            except Exception as exc:
-                self._fault = f"reconnect failed: {exc}"
-            time.sleep(delay)
-            delay *= 2
-        self._fault = "disconnected from the controller"
+        for attempt in range(self.reconnect_attempts + 1):
+            with self._lock:
+                if self._control is None:
+                    raise HwInterfaceError("not connected to the UR controller: call LOGIN first",
+                                           Result.NOT_CONNECTED)
+                try:
+                    if self._control.isConnected() and self._receive.isConnected():
+                        if attempt:
+                            self._fault = ""
+                        return
+                    if attempt and self._receive.reconnect() and self._control.reconnect():
+                        self._io.reconnect()
+                        self._fault = ""
+                        return
+                except Exception as exc:
+                    self._fault = f"reconnect failed: {exc}"
+            if attempt == self.reconnect_attempts:
+                break
+            if attempt:
+                self._sleep(delay)
+                delay *= 2
+        with self._lock:
+            self._fault = "disconnected from the controller"
         raise HwInterfaceError("lost the connection to the UR controller and could not reconnect",
                                Result.NOT_CONNECTED)
 
     def _ensure_can_move(self):
         self._ensure_connected()
-        if self._receive.isProtectiveStopped() or self._receive.isEmergencyStopped():
-            raise HwInterfaceError("the robot is in a protective or emergency stop: clear it on the pendant",
-                                   Result.PROTECTIVE_STOP)
+        with self._lock:
+            if self._receive.isProtectiveStopped() or self._receive.isEmergencyStopped():
+                raise HwInterfaceError("the robot is in a protective or emergency stop: clear it on the pendant",
+                                       Result.PROTECTIVE_STOP)
 
     # -- state -----------------------------------------------------------------------------
     def get_robot_joints(self) -> np.ndarray:
+        self._ensure_connected()
         with self._lock:
-            self._ensure_connected()
             return np.array(self._receive.getActualQ(), dtype=float)
 
     def get_robot_cartesian_position(self):
+        self._ensure_connected()
         with self._lock:
-            self._ensure_connected()
             return ur_to_pose(self._receive.getActualTCPPose())
 
     def status(self) -> DriverStatus:
@@ -208,8 +279,10 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
 
     # -- motion ----------------------------------------------------------------------------
     def set_joints(self, joints) -> None:
+        self._ensure_can_move()
         with self._lock:
-            self._ensure_can_move()
+            if self._active_move is not None:
+                raise HwInterfaceError(f"a {self._active_move} is running; STOP it before streaming", Result.BUSY)
             self._target = np.asarray(joints, dtype=float)
             self._target_time = time.monotonic()
             if not self._streaming.is_set():
@@ -218,51 +291,135 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                 self._stream_thread.start()
 
     def move_j(self, joints, timeout: float = 30.0, asynchronous: bool = False) -> None:
-        with self._lock:
-            self._ensure_can_move()
-            self._stop_streaming()
-            ok = self._control.moveJ(list(map(float, joints)), self.joint_speed, self.joint_acceleration, asynchronous)
-        self._check_motion(ok, "moveJ")
+        goal = np.asarray(joints, dtype=float)
+        token, before = self._start_move(
+            "moveJ", lambda control: control.moveJ(list(map(float, goal)), self.joint_speed,
+                                                   self.joint_acceleration, True))
+        if not asynchronous:
+            self._watch("moveJ", token, before, timeout, lambda q: self._joint_error(q, goal))
 
     def move_l(self, position, orientation, timeout: float = 30.0, asynchronous: bool = False) -> None:
-        with self._lock:
-            self._ensure_can_move()
-            self._stop_streaming()
-            ok = self._control.moveL(pose_to_ur(position, orientation), self.linear_speed,
-                                     self.linear_acceleration, asynchronous)
-        self._check_motion(ok, "moveL")
+        pose = pose_to_ur(position, orientation)
+        token, before = self._start_move(
+            "moveL", lambda control: control.moveL(pose, self.linear_speed, self.linear_acceleration, True))
+        if not asynchronous:
+            self._watch("moveL", token, before, timeout, lambda q: self._pose_error(q, position, orientation))
 
-    def stop(self) -> None:
+    def stop(self, reason: str = "STOP") -> None:
+        """Stop now, from any thread: stopL for a MoveL, stopJ otherwise, servoStop for
+        streaming; a blocking move being watched answers INTERRUPTED within one period."""
         with self._lock:
             if self._control is None:
                 return
+            self._stopped_token = self._move_token
+            self._stop_reason = reason
+            active, self._active_move = self._active_move, None
+            self._wake.set()
             try:
                 self._stop_streaming()
             finally:
                 try:
-                    self._control.stopJ(2.0)
+                    if active == "moveL":
+                        _stop_call(self._control.stopL, self.linear_stop_deceleration)
+                    else:
+                        _stop_call(self._control.stopJ, self.joint_stop_deceleration)
                 except Exception as exc:  # the connection may be gone; nothing moves then
-                    self._fault = f"stopJ failed: {exc}"
+                    self._fault = f"stop failed: {exc}"
 
     def set_gripper(self, closed: bool) -> None:
         self.set_digital_output(self.gripper_output, closed)
         self._gripper_on = bool(closed)
 
     def set_digital_output(self, output: int, value: bool) -> None:
+        self._ensure_connected()
         with self._lock:
-            self._ensure_connected()
             if not self._io.setStandardDigitalOut(int(output), bool(value)):
                 raise HwInterfaceError(f"controller refused digital output {output}", Result.DRIVER_FAULT)
 
     # -- internals -------------------------------------------------------------------------
-    def _check_motion(self, ok, what):
-        if ok:
-            return
+    def _joint_error(self, q, goal):
+        return float(np.max(np.abs(q - goal))), self.goal_tolerance, "rad"
+
+    def _pose_error(self, q, position, orientation):
+        reached, quat = self.kinematics.forward_pose(q)
+        distance = float(np.linalg.norm(reached - np.asarray(position, dtype=float)))
+        angle = float((Rotation.from_quat(quat).inv() * Rotation.from_quat(orientation)).magnitude())
+        # Report the worse of the two as a fraction of its tolerance, in metres for the message.
+        ratio = max(distance / self.goal_position_tolerance, angle / self.goal_tolerance)
+        return ratio * self.goal_position_tolerance, self.goal_position_tolerance, "m (position/orientation)"
+
+    def _start_move(self, kind, issue):
+        """Issue an asynchronous move under the lock (briefly); return its token and the
+        async progress value before it, to detect its end."""
+        self._ensure_can_move()
         with self._lock:
-            stopped = self._receive is not None and self._receive.isProtectiveStopped()
+            self._stop_streaming()
+            self._move_token += 1
+            token = self._move_token
+            self._wake.clear()
+            before = self._control.getAsyncOperationProgress()
+            ok = issue(self._control)
+            if ok:
+                self._active_move = kind
+            stopped = not ok and self._receive.isProtectiveStopped()
+        if ok:
+            return token, before
         if stopped:
-            raise HwInterfaceError(f"{what} interrupted by a protective stop", Result.PROTECTIVE_STOP)
-        raise HwInterfaceError(f"{what} failed on the controller", Result.DRIVER_FAULT)
+            raise HwInterfaceError(f"{kind} refused: the robot is in a protective stop", Result.PROTECTIVE_STOP)
+        raise HwInterfaceError(f"{kind} refused by the controller (unreachable or outside its limits)",
+                               Result.DRIVER_FAULT)
+
+    def _interrupted(self, kind, token, why):
+        with self._lock:
+            if self._move_token == token:
+                self._active_move = None
+        return HwInterfaceError(f"{kind} interrupted: {why}", Result.INTERRUPTED)
+
+    def _watch(self, kind, token, before, timeout, error_of):
+        """Follow an asynchronous move to its end at the controller period, taking the lock
+        only for each poll; raise INTERRUPTED, TIMEOUT, or return once arrived."""
+        deadline = self._clock() + max(float(timeout), 0.0)
+        seen_running = False
+        ended_at = None
+        while True:
+            with self._lock:
+                if self._stopped_token >= token:
+                    raise self._interrupted(kind, token, f"{self._stop_reason} (robot stopped short of the goal)")
+                if self._control is None:
+                    raise self._interrupted(kind, token, "the driver disconnected")
+                try:
+                    if self._receive.isProtectiveStopped() or self._receive.isEmergencyStopped():
+                        self._fault = f"protective stop during {kind}"
+                        raise self._interrupted(kind, token, "protective or emergency stop")
+                    progress = self._control.getAsyncOperationProgress() if ended_at is None else -1
+                    q = np.array(self._receive.getActualQ(), dtype=float)
+                except HwInterfaceError:
+                    raise
+                except Exception as exc:  # connection lost mid-move: the controller halts the arm
+                    self._fault = f"{kind} lost the controller: {exc}"
+                    raise self._interrupted(kind, token, f"connection lost ({exc})") from None
+                now = self._clock()
+                if ended_at is None:
+                    if progress >= 0:
+                        seen_running = True
+                    elif seen_running or progress != before:
+                        ended_at = now
+                        if self._move_token == token:
+                            self._active_move = None
+                if ended_at is not None:
+                    error, tolerance, unit = error_of(q)
+                    if error <= tolerance:
+                        return
+                    if now - ended_at > self.settle_time:
+                        raise HwInterfaceError(f"{kind} ended {error:.4f} {unit} from the goal (tolerance "
+                                               f"{tolerance:g}): the controller stopped short", Result.INTERRUPTED)
+                elif now >= deadline:
+                    pass  # handled below, outside the poll
+            if ended_at is None and self._clock() >= deadline:
+                self.stop(reason="timeout")
+                raise HwInterfaceError(f"{kind} did not finish within {timeout:.1f} s; robot stopped",
+                                       Result.TIMEOUT)
+            self._wake.wait(self.period)
 
     def _stop_streaming(self):
         """servoStop before anything else moves the arm (caller holds the lock)."""
@@ -271,7 +428,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         self._streaming.clear()
         self._target = None
         try:
-            self._control.servoStop()
+            self._control.servoStop(self.servo_stop_deceleration)
         except Exception as exc:
             self._fault = f"servoStop failed: {exc}"
 
