@@ -159,5 +159,6 @@ def test_kalman_loads_filterpy_when_built_not_on_the_first_frame():
     code = ("import sys; from motion_sensor.filters import make_filter; "
             "assert 'filterpy.kalman' not in sys.modules; make_filter('kalman'); "
             "assert 'filterpy.kalman' in sys.modules")
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([package_root, os.environ.get("PYTHONPATH", "")]))
+    common_root = os.path.join(os.path.dirname(__file__), "..", "..", "src", "motion_common")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([package_root, common_root, os.environ.get("PYTHONPATH", "")]))
     subprocess.run([sys.executable, "-c", code], check=True, env=env)

@@ -75,25 +75,45 @@ def test_bad_messages_are_counted_and_the_stream_goes_on():
     assert any("exceeds" in p for p in problems) and any("not finite" in p for p in problems)
 
 
+def wait_for(condition, timeout=10.0):
+    """Poll ``condition`` until it holds or ``timeout`` s pass (a deadline, not a measurement)."""
+    deadline = time.monotonic() + timeout
+    while not condition() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return condition()
+
+
 def test_reconnects_with_backoff_after_a_drop():
     port = free_port()
-    problems = []
-    frames = []
+    problems, frames, waits = [], [], []
+    allowed = threading.Semaphore(0)  # the injected wait: returns at once, as often as the test allows
+
+    def wait(seconds):
+        waits.append(seconds)
+        allowed.acquire(timeout=10)
+
     client = LeapClient("127.0.0.1", port, on_frame=lambda f, t: frames.append(f), on_problem=problems.append,
-                        backoff=Backoff(0.05, 2.0, 0.2))
+                        backoff=Backoff(0.05, 2.0, 0.2), wait=wait)
     thread = threading.Thread(target=client.run, daemon=True)
     thread.start()
-    time.sleep(0.3)  # nobody listening yet: refused, retried
-    assert client.counters["disconnects"] >= 2
+    for _ in range(3):  # nobody listening yet: refused, retried with growing delays
+        assert wait_for(lambda: len(waits) > _)
+        allowed.release()
+    assert wait_for(lambda: len(waits) == 4)
+    assert waits == [0.05, 0.1, 0.2, 0.2] and client.counters["disconnects"] == 4
     server = LeapReplayServer(RECORDING, port=port, rate=0).start()  # serves one pass, then closes
-    deadline = time.monotonic() + 10
-    while client.counters["connections"] < 2 and time.monotonic() < deadline:
-        time.sleep(0.02)
+    allowed.release()
+    assert wait_for(lambda: client.counters["connections"] >= 1 and len(waits) >= 5)
+    assert waits[4] == 0.05  # a good connection reset the backoff
+    allowed.release()
+    assert wait_for(lambda: client.counters["connections"] >= 2)  # came back after the server closed the socket
     client.stop()
+    for _ in range(3):
+        allowed.release()
     thread.join(timeout=5)
     server.shutdown()
-    assert client.counters["connections"] >= 2  # came back after the server closed the socket
-    assert len(frames) >= len(server.frames)
+    assert not thread.is_alive() and len(frames) >= len(server.frames)
+    assert all("retrying" in p for p in problems[:4])
 
 
 def test_clock_mapper_restarts_with_the_device_clock():

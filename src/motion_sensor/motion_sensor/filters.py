@@ -4,6 +4,8 @@ from collections import deque
 
 import numpy as np
 
+from motion_common.params import Param, ParamSchema
+
 from .errors import MotionSensorError
 
 
@@ -316,3 +318,30 @@ class KalmanFilter:
 
 FILTERS["one_euro"] = OneEuroFilter
 FILTERS["kalman"] = KalmanFilter
+
+
+# Every filter's parameters with units and ranges: sequencer.yaml's ``filter_params`` is
+# checked against these (an unknown key stops the sequencer). The defaults are the
+# constructors' (a unit test keeps them equal).
+FILTER_PARAMS = ParamSchema([
+    Param("mean", {}, doc="MeanFilter", schema=ParamSchema([
+        Param("queue_size", 10, unit="frames", low=1, high=10000, doc="poses averaged"),
+    ])),
+    Param("one_euro", {}, doc="OneEuroFilter", schema=ParamSchema([
+        Param("mincutoff", 3.0, unit="Hz", low=0, low_open=True, doc="cutoff while slower than speed_threshold"),
+        Param("beta", 1280.0, unit="Hz per m/s", low=0, doc="cutoff growth with speed above speed_threshold"),
+        Param("dcutoff", 1.0, unit="Hz", low=0, low_open=True, doc="smoothing of the speed estimate"),
+        Param("beta_rot", 0.5, unit="Hz per rad/s", low=0, doc="cutoff growth with turn rate"),
+        Param("deadband", 0.0, unit="m", low=0, doc="hysteresis after the low-pass (0 = off)"),
+        Param("speed_threshold", 0.08, unit="m/s", low=0, doc="speed below which the cutoff stays at mincutoff"),
+    ])),
+    Param("kalman", {}, doc="KalmanFilter (IMM of a steady and a manoeuvring model)", schema=ParamSchema([
+        Param("process_noise", 1e-5, unit="m^2/s^3", low=0, low_open=True, doc="steady constant-velocity model"),
+        Param("measurement_noise", 0.005, unit="m", low=0, low_open=True, doc="what the steady model ignores"),
+        Param("maneuver_process_noise", 10.0, unit="m^2/s^3", low=0, doc="manoeuvring model (0 = single CV model)"),
+        Param("switch_probability", 0.005, unit="per frame", low=0, low_open=True, high=0.4999,
+              doc="between the two models"),
+        Param("mincutoff", 1.0, unit="Hz", low=0, low_open=True, doc="orientation low-pass cutoff"),
+        Param("beta_rot", 0.5, unit="Hz per rad/s", low=0, doc="orientation cutoff growth with turn rate"),
+    ])),
+])

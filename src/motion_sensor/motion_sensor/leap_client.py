@@ -4,6 +4,7 @@ The Leap service listens on ws://127.0.0.1:6437/v6.json, sends {"version":6} on 
 then one JSON message per tracking frame. The client answers the handshake with the exact
 string {"focused":true} (Ultraleap's bridge matches control messages as exact strings),
 parses every frame, and reconnects with exponential backoff when the socket drops.
+``LeapDevice`` is the Leap as a HandDevice (nodes/leap_driver).
 """
 import threading
 import time
@@ -13,30 +14,13 @@ from typing import Callable, Optional
 from websockets.exceptions import ConnectionClosed, InvalidHandshake, InvalidURI
 from websockets.sync.client import connect
 
-from .errors import MotionSensorError
-from .leap_v6 import LeapFrame, parse_message
+from motion_common.params import Param, ParamSchema
+
+from .device import Backoff, HandDevice, empty_sample, reconnect_loop
+from .errors import DeviceUnavailable, MotionSensorError
+from .leap_v6 import LeapFrame, frame_to_sample, parse_message
 
 FOCUSED = '{"focused":true}'
-
-
-class Backoff:
-    """Exponential backoff delays: ``initial`` s, times ``factor``, capped at ``maximum``."""
-
-    def __init__(self, initial: float = 0.25, factor: float = 2.0, maximum: float = 5.0):
-        if not (initial > 0 and factor >= 1 and maximum >= initial):
-            raise MotionSensorError("backoff needs initial > 0, factor >= 1, maximum >= initial")
-        self.initial, self.factor, self.maximum = initial, factor, maximum
-        self._next = initial
-
-    def next(self) -> float:
-        """The delay to wait now; the following one grows."""
-        delay = self._next
-        self._next = min(self._next * self.factor, self.maximum)
-        return delay
-
-    def reset(self) -> None:
-        """Back to the initial delay (after a good connection)."""
-        self._next = self.initial
 
 
 class ClockMapper:
@@ -65,17 +49,23 @@ class ClockMapper:
         return device_time + min(self._offsets)
 
 
+# What websockets raises when the service is absent, drops or misbehaves: a reconnect may cure it.
+_SOCKET_ERRORS = (OSError, ConnectionClosed, InvalidHandshake, InvalidURI, TimeoutError)
+
+
 class LeapClient:
     """Connects to a Leap v6 service and hands every parsed frame to ``on_frame``.
 
     ``on_frame(frame, received_time)`` is called for each tracking frame; bad messages are
     counted in ``counters`` (by reason) and reported through ``on_problem(text)``.
-    ``run()`` blocks until ``stop()``; it reconnects with backoff on any drop.
+    ``connect``/``receive``/``close`` are one connection (LeapDevice uses them);
+    ``run()`` loops over connections with backoff until ``stop()``, waiting through
+    ``wait(seconds)`` (injectable: tests need no real sleeping).
     """
 
     def __init__(self, host: str = "127.0.0.1", port: int = 6437, on_frame: Callable = None,
                  on_problem: Callable = None, backoff: Optional[Backoff] = None, clock=time.time,
-                 open_timeout: float = 2.0, frame_timeout: float = 2.0):
+                 open_timeout: float = 2.0, frame_timeout: float = 2.0, wait: Callable[[float], object] = None):
         if not 0 < int(port) < 65536:
             raise MotionSensorError(f"leap port must be 1-65535, got {port!r}")
         self.uri = f"ws://{host}:{int(port)}/v6.json"
@@ -87,6 +77,7 @@ class LeapClient:
         self.frame_timeout = frame_timeout
         self.counters = Counter()
         self._stop = threading.Event()
+        self.wait = wait or self._stop.wait
         self._socket = None
 
     def stop(self) -> None:
@@ -96,49 +87,122 @@ class LeapClient:
         if socket is not None:
             socket.close()
 
+    def connect(self) -> None:
+        """Open the socket and do the v6 handshake; DeviceUnavailable when that fails."""
+        try:
+            # close_timeout is short: on stop() nobody should wait 10 s for a closing handshake.
+            socket = connect(self.uri, open_timeout=self.open_timeout, max_size=4 * 1024 * 1024,
+                             compression=None, close_timeout=0.5).__enter__()  # as `with` would
+        except _SOCKET_ERRORS as exc:
+            raise DeviceUnavailable(f"leap connection to {self.uri} refused ({type(exc).__name__}: {exc})") from None
+        self._socket = socket
+        try:
+            first = socket.recv(timeout=self.open_timeout)
+            if parse_message(first) is not None or '"version"' not in str(first):
+                raise DeviceUnavailable(f"expected the {{\"version\":6}} handshake, got {str(first)[:60]!r}")
+            socket.send(FOCUSED)
+        except (MotionSensorError, *_SOCKET_ERRORS) as exc:
+            self.close()
+            if isinstance(exc, DeviceUnavailable):
+                raise
+            raise DeviceUnavailable(f"leap handshake with {self.uri} failed ({type(exc).__name__}: {exc})") from None
+
+    def receive(self):
+        """(frame, received time) of the next tracking frame, or None for a control or
+        rejected message; DeviceUnavailable when the connection is lost."""
+        socket = self._socket
+        if socket is None or self._stop.is_set():
+            raise DeviceUnavailable(f"leap connection to {self.uri} closed")
+        try:
+            message = socket.recv(timeout=self.frame_timeout)
+        except _SOCKET_ERRORS as exc:
+            raise DeviceUnavailable(f"leap connection to {self.uri} lost ({type(exc).__name__}: {exc})") from None
+        received = self.clock()
+        frame = self._handle(message)
+        return None if frame is None else (frame, received)
+
+    def close(self) -> None:
+        """Close the socket (if open)."""
+        socket, self._socket = self._socket, None
+        if socket is not None:
+            socket.close()
+
     def run(self) -> None:
         """Connect, read frames, reconnect on drops, until stop()."""
-        while not self._stop.is_set():
-            try:
-                self._session()
-            except (OSError, ConnectionClosed, InvalidHandshake, InvalidURI, TimeoutError, MotionSensorError) as exc:
-                if self._stop.is_set():
-                    break
-                self.counters["disconnects"] += 1
-                delay = self.backoff.next()
-                self.on_problem(f"leap connection to {self.uri} lost or refused ({type(exc).__name__}: {exc}); "
-                                f"retrying in {delay:.2f} s")
-                self._stop.wait(delay)
+        reconnect_loop(self._session, self._stop.is_set, self.backoff, self.wait, self._on_error)
+
+    def _on_error(self, exc, delay) -> None:
+        self.counters["disconnects"] += 1
+        self.on_problem(f"{exc}; retrying in {delay:.2f} s")
 
     def _session(self) -> None:
-        # close_timeout is short: on stop() nobody should wait 10 s for a closing handshake.
-        with connect(self.uri, open_timeout=self.open_timeout, max_size=4 * 1024 * 1024,
-                     compression=None, close_timeout=0.5) as socket:
-            self._socket = socket
-            try:
-                first = socket.recv(timeout=self.open_timeout)
-                if parse_message(first) is not None or '"version"' not in str(first):
-                    raise MotionSensorError(f"expected the {{\"version\":6}} handshake, got {str(first)[:60]!r}")
-                socket.send(FOCUSED)
-                self.counters["connections"] += 1
-                self.backoff.reset()
-                while not self._stop.is_set():
-                    message = socket.recv(timeout=self.frame_timeout)
-                    received = self.clock()
-                    self._handle(message, received)
-            finally:
-                self._socket = None
+        self.connect()
+        self.counters["connections"] += 1
+        self.backoff.reset()
+        try:
+            while not self._stop.is_set():
+                got = self.receive()
+                if got is not None:
+                    self.on_frame(*got)
+        finally:
+            self.close()
 
-    def _handle(self, message, received: float) -> None:
+    def _handle(self, message) -> Optional[LeapFrame]:
         self.counters["messages"] += 1
         try:
             frame: Optional[LeapFrame] = parse_message(message)
         except MotionSensorError as exc:
             self.counters["rejected"] += 1
             self.on_problem(f"rejected Leap message: {exc}")
-            return
+            return None
         if frame is None:
             self.counters["control_messages"] += 1
-            return
+            return None
         self.counters["frames"] += 1
-        self.on_frame(frame, received)
+        return frame
+
+
+class LeapDevice(HandDevice):
+    """A live Leap service over WebSocket v6 as a HandDevice: every frame is published, also
+    those without a hand (hands_num 0, so the sequencer knows the hand left), stamped with
+    the device's capture time mapped onto the local clock."""
+
+    name = "leap"
+    default_frame_id = "leap"
+    params = ParamSchema([
+        Param("host", "127.0.0.1", doc="Leap service host"),
+        Param("port", 6437, low=1, high=65535, doc="Leap service port"),
+        Param("primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"),
+        Param("open_timeout_s", 2.0, unit="s", low=0, low_open=True, doc="connect and handshake timeout"),
+        Param("frame_timeout_s", 2.0, unit="s", low=0, low_open=True, doc="silence that counts as a lost connection"),
+    ])
+
+    def __init__(self, config, **kw):
+        super().__init__(config, **kw)
+        self.primary = self.config["primary_hand"]
+        self.client = LeapClient(self.config["host"], self.config["port"], on_problem=lambda text: self.warn(text),
+                                 clock=self.clock, open_timeout=self.config["open_timeout_s"],
+                                 frame_timeout=self.config["frame_timeout_s"])
+        self.counters = self.client.counters  # one set of counters: rejected messages, frames, ...
+        self.mapper = ClockMapper()
+
+    def describe(self) -> str:
+        return self.client.uri
+
+    def open(self) -> None:
+        self.client.connect()
+
+    def read(self, now):
+        got = self.client.receive()
+        if got is None:
+            return None
+        frame, received = got
+        stamp = self.mapper.to_local(frame.timestamp, received)
+        sample = frame_to_sample(frame, stamp, self.primary, self.frame_id)
+        return empty_sample(stamp, self.frame_id, "leap") if sample is None else sample
+
+    def close(self) -> None:
+        self.client.close()
+
+    def stop(self) -> None:
+        self.client.stop()

@@ -1,5 +1,12 @@
-"""Replay schedules: when each recorded frame is due, relative to the replay start."""
+"""Recorded hand streams: replay schedules, CSV and recording loading, and ReplayDevice,
+a recording as a HandDevice (nodes/hand_replay)."""
+import dataclasses
 from typing import Iterable, Iterator, Tuple
+
+from motion_common.params import Param, ParamSchema
+
+from .device import HandDevice, empty_sample
+from .errors import EndOfStream, MotionSensorError
 
 
 def replay_schedule(times: Iterable[float], rate: float = 1.0, start_offset: float = 0.0) -> Iterator[Tuple[int, float]]:
@@ -58,3 +65,108 @@ def read_csv(path: str):
     if not samples:
         raise MotionSensorError(f"CSV {path} holds no usable row ({len(rejected)} rejected)")
     return samples, rejected
+
+
+def load_samples(path: str, primary: str = "right", frame_id: str = "leap"):
+    """([(recorded time s, HandSample)], rejected lines) of a Leap v6 recording (.jsonl,
+    .jsonl.gz), a rosbag of motion_sensor/hand (.bag) or a CSV (.csv). Frames without a hand
+    are kept (hands_num 0). Raises MotionSensorError for a file that cannot be used."""
+    if path.endswith(".bag"):
+        import rosbag
+
+        from .ros_conversions import msg_to_sample
+        samples = []
+        try:
+            with rosbag.Bag(path) as bag:
+                for _, msg, t in bag.read_messages():
+                    if msg._type == "motion_sensor/hand":
+                        stamp = msg.header.stamp.to_sec() if msg.header.stamp else t.to_sec()
+                        sample = msg_to_sample(msg, device="bag")
+                        sample.frame_id = msg.header.frame_id or frame_id
+                        samples.append((stamp, sample))
+        except (OSError, rosbag.ROSBagException) as exc:
+            raise MotionSensorError(f"cannot read bag {path}: {exc}") from None
+        if not samples:
+            raise MotionSensorError(f"bag {path} has no motion_sensor/hand message")
+        return samples, []
+    if path.endswith(".csv"):
+        rows, rejected = read_csv(path)
+        for sample in rows:
+            sample.frame_id = frame_id
+        return [(sample.stamp, sample) for sample in rows], rejected
+    from .leap_v6 import frame_to_sample, read_recording
+    try:
+        recording = read_recording(path)
+    except OSError as exc:
+        raise MotionSensorError(f"cannot read recording {path}: {exc}") from None
+    if not recording.frames:
+        raise MotionSensorError(f"recording {path} holds no usable frame ({len(recording.rejected)} rejected)")
+    samples = []
+    for frame in recording.frames:
+        sample = frame_to_sample(frame, stamp=frame.timestamp, preference=primary, frame_id=frame_id)
+        samples.append((frame.timestamp, empty_sample(frame.timestamp, frame_id, "leap") if sample is None else sample))
+    return samples, recording.rejected
+
+
+class ReplayDevice(HandDevice):
+    """A recorded hand stream as a HandDevice: samples at recorded timing (``rate``), stamped
+    with the time they are published, as a live driver stamps frames on reception; looped,
+    or finite (EndOfStream at the end: the node reports ~finished and exits)."""
+
+    name = "replay"
+    default_frame_id = "leap"
+    finite = True
+    wrapper_defaults = {"min_subscribers": 1}  # never play to nobody
+    params = ParamSchema([
+        Param("recording", "", doc="Leap v6 .jsonl(.gz), rosbag of motion_sensor/hand (.bag) or CSV (.csv)"),
+        Param("rate", 1.0, low=0, doc="speed factor: 1 the recorded timing, 0 as fast as possible"),
+        Param("loop", False, doc="start again at the end (the node then never finishes)"),
+        Param("start_offset", 0.0, unit="s", low=0, doc="seconds into the recording to start from"),
+        Param("primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"),
+    ])
+
+    def __init__(self, config, **kw):
+        super().__init__(config, **kw)
+        if not self.config["recording"]:
+            raise MotionSensorError("parameter 'recording' must name the file to replay")
+        # Loaded now, so a missing or unusable file stops the node before it waits for anyone.
+        self.samples, self._rejected = load_samples(self.config["recording"], self.config["primary_hand"],
+                                                    self.frame_id)
+        self.counters["rejected"] += len(self._rejected)
+        self._schedule = None
+        self._start = None
+
+    def describe(self) -> str:
+        return f"replay of {self.config['recording']}"
+
+    def open(self) -> None:
+        if self._rejected is not None:
+            for problem in self._rejected[:5]:
+                self.warn(f"{self.config['recording']}: {problem}")
+            self._rejected = None
+            self.info(f"playing {len(self.samples)} frames ({self.samples[-1][0] - self.samples[0][0]:.2f} s) "
+                      f"at rate {self.config['rate']:.2f}")
+        self._restart()
+
+    def _restart(self) -> None:
+        self._schedule = replay_schedule([t for t, _ in self.samples], self.config["rate"],
+                                         self.config["start_offset"])
+        self._start = self.clock()
+
+    def read(self, now):
+        step = next(self._schedule, None)
+        if step is None and self.config["loop"]:
+            self.counters["loops"] += 1
+            self._restart()
+            step = next(self._schedule, None)
+        if step is None:
+            raise EndOfStream()
+        index, due = step
+        delay = self._start + due - self.clock()
+        if delay > 0:
+            self.sleep(delay)
+        self.counters["frames"] += 1
+        return dataclasses.replace(self.samples[index][1], stamp=self.clock())
+
+    def close(self) -> None:
+        pass

@@ -23,7 +23,9 @@ from typing import Dict, Optional
 import numpy as np
 
 from .errors import MotionSensorError
-from .filters import make_filter
+from motion_common.params import Param, ParamSchema
+
+from .filters import FILTER_PARAMS, FILTERS, make_filter
 from .hand_sample import HandSample
 
 # Drops that are the sequencer doing its job, not bad input: counted, never warned about.
@@ -65,6 +67,55 @@ class SequencerConfig:
                 raise MotionSensorError(f"{name} must be >= 0, got {getattr(self, name)!r}")
         if self.jump_accept_after < 1:
             raise MotionSensorError("jump_accept_after must be >= 1 frame")
+
+
+INPUT_PARAMS = ParamSchema([
+    Param("topic", "~input", doc="motion_sensor/hand topic of the device"),
+    Param("device", "default", doc="device name (binding, active_device)"),
+    Param("priority", 0, doc="higher drives when several devices are alive"),
+])
+
+# The sequencer node's parameters (config/sequencer.yaml and what launch files set).
+SEQUENCER_PARAMS = ParamSchema([
+    Param("filter", "mean", choices=tuple(sorted(FILTERS)), doc="pose filter"),
+    Param("filter_params", {}, schema=FILTER_PARAMS, doc="per filter name, that filter's parameters"),
+    Param("queue_size", None, kind=int, unit="frames", low=1, high=10000, nullable=True,
+          doc="mean filter window; overrides filter_params.mean.queue_size when set"),
+    Param("max_age_s", 0.25, unit="s", low=0, low_open=True, doc="older frames are stale and dropped"),
+    Param("max_future_s", 0.05, unit="s", low=0, doc="frames stamped further ahead are dropped"),
+    Param("entry_trim_frames", 10, unit="frames", low=0, doc="ignored when a hand (re)enters"),
+    Param("exit_trim_frames", 0, unit="frames", low=0, doc="held back and discarded when a hand leaves"),
+    Param("hand_lost_s", 0.2, unit="s", low=0, low_open=True, doc="a gap this long means the hand left"),
+    Param("jump_distance_m", 0.05, unit="m", low=0, low_open=True, doc="a larger move within jump_window_s is a jump"),
+    Param("jump_angle_rad", 0.8, unit="rad", low=0, low_open=True, doc="a larger turn within jump_window_s is a jump"),
+    Param("jump_window_s", 0.05, unit="s", low=0, low_open=True, doc="time window of the jump test"),
+    Param("jump_accept_after", 5, unit="frames", low=1, doc="frames agreeing on a new place accept it"),
+    Param("device_timeout_s", 0.3, unit="s", low=0, low_open=True, doc="a silent device loses the binding"),
+    Param("active_device", "", doc="force a device by name; empty = highest priority alive"),
+    Param("hand_frame", "hand", doc="tf child frame of the filtered hand"),
+    Param("inputs", None, kind=list, item_kind=dict, nullable=True,
+          doc="[{topic, device, priority}] per device; unset = one input ~input named default"),
+])
+
+
+def sequencer_setup(params: dict, source: str):
+    """(SequencerConfig, inputs) of validated SEQUENCER_PARAMS values; raises ParameterError
+    (inputs entries) or MotionSensorError (values the stages refuse)."""
+    inputs = params["inputs"]
+    if inputs is None:
+        inputs = [INPUT_PARAMS.defaults()]
+    else:
+        inputs = [INPUT_PARAMS.validate(entry, f"{source}: 'inputs'[{i}]") for i, entry in enumerate(inputs)]
+    name = params["filter"]
+    filter_params = dict((params["filter_params"] or {}).get(name) or {})
+    if name == "mean" and params["queue_size"] is not None:
+        filter_params["queue_size"] = params["queue_size"]
+    keys = ("max_age_s", "max_future_s", "entry_trim_frames", "exit_trim_frames", "hand_lost_s", "jump_distance_m",
+            "jump_angle_rad", "jump_window_s", "jump_accept_after", "device_timeout_s", "active_device")
+    config = SequencerConfig(filter_name=name, filter_params=filter_params,
+                             device_priorities={entry["device"]: entry["priority"] for entry in inputs},
+                             **{key: params[key] for key in keys})
+    return config, inputs
 
 
 @dataclass

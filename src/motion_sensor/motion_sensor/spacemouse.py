@@ -1,5 +1,6 @@
 """3Dconnexion SpaceMouse over HID (hidapi): report decoding, rate-to-pose integration and a
-reconnecting reader. No rospy here; nodes/spacemouse_driver wires it to topics.
+reconnecting reader, and SpaceMouseDevice, the SpaceMouse as a HandDevice (no rospy here;
+nodes/spacemouse_driver runs it through motion_sensor.device_node).
 
 A SpaceMouse is a rate device: the cap's deflection says how fast to move, not where the
 hand is. The rest of the stack expects hand poses (hand.msg), so RateIntegrator turns the
@@ -24,8 +25,11 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .errors import MotionSensorError
-from .leap_client import Backoff
+from motion_common.params import Param, ParamSchema
+
+from .device import Backoff, HandDevice, reconnect_loop
+from .errors import DeviceUnavailable, MotionSensorError
+from .hand_sample import HandSample
 
 # (vendor id, product id) -> model, as listed by the spacenavd project; any other device is
 # given with vendor_id/product_id.
@@ -239,44 +243,67 @@ class SpaceMouseReader:
         self.read_timeout_ms = int(read_timeout_ms)
         self.counters = Counter()
         self.device_name = ""
+        self._device = None
         self._stop = threading.Event()
 
     def stop(self) -> None:
         """Make ``run`` return."""
         self._stop.set()
 
-    def _open(self):
+    def _find(self):
         found = find_device(self.hid, self.vendor_id, self.product_id)
         if found is None:
             wanted = (f"{self.vendor_id:04x}:{self.product_id:04x}" if self.vendor_id is not None
                       else "any known SpaceMouse")
             raise OSError(f"no HID device {wanted} (is it plugged in, and readable: see the README's udev rule?)")
+        return found
+
+    def open(self) -> None:
+        """Open the first matching device (OSError when there is none or it cannot be opened)."""
+        vendor, product, name = self._find()
         device = self.hid.device()
-        device.open(found[0], found[1])
-        self.device_name = found[2]
-        return device
+        device.open(vendor, product)
+        self._device = device
+        self.device_name = name
+        self.on_connect(self.device_name)
+
+    def read_report(self, timeout_ms: int = None):
+        """The next input report (a list of ints), or None after ``timeout_ms`` without one;
+        OSError/ValueError when the device is gone."""
+        if self._device is None:
+            raise OSError("SpaceMouse not open")
+        report = self._device.read(64, self.read_timeout_ms if timeout_ms is None else timeout_ms)
+        if not report:
+            return None
+        self.counters["hid_reports"] += 1
+        return report
+
+    def close(self) -> None:
+        """Close the device (if open)."""
+        device, self._device = self._device, None
+        if device is not None:
+            device.close()
 
     def run(self) -> None:
         """Read until stopped; reconnect with backoff after any HID error."""
-        while not self._stop.is_set():
-            device = None
-            try:
-                device = self._open()
-                self.counters["connections"] += 1
-                self.backoff.reset()
-                self.on_connect(self.device_name)
-                while not self._stop.is_set():
-                    report = device.read(64, self.read_timeout_ms)
-                    if report:
-                        self.counters["reports"] += 1
-                        self.on_report(report, self.clock())
-            except (OSError, ValueError) as exc:  # hidapi raises OSError/IOError on unplug
-                self.counters["connection_errors"] += 1
-                self.on_problem(f"SpaceMouse: {exc}; retrying")
-                self._stop.wait(self.backoff.next())
-            finally:
-                if device is not None:
-                    device.close()
+        reconnect_loop(self._session, self._stop.is_set, self.backoff, self._stop.wait, self._on_error,
+                       retry=(OSError, ValueError))
+
+    def _on_error(self, exc, delay) -> None:
+        self.counters["connection_errors"] += 1
+        self.on_problem(f"SpaceMouse: {exc}; retrying")
+
+    def _session(self) -> None:
+        try:
+            self.open()
+            self.counters["connections"] += 1
+            self.backoff.reset()
+            while not self._stop.is_set():
+                report = self.read_report()
+                if report:
+                    self.on_report(report, self.clock())
+        finally:
+            self.close()
 
 
 def read_report_log(path: str):
@@ -304,3 +331,150 @@ def read_report_log(path: str):
 def format_report_line(seconds: float, report: Sequence[int]) -> str:
     """One report-log line (see read_report_log)."""
     return f"{seconds:.4f} {bytes(report).hex()}\n"
+
+
+def rate_config(config: dict) -> RateConfig:
+    """The RateConfig of a validated SpaceMouseDevice config."""
+    return RateConfig(**{name: tuple(config[name]) if isinstance(config[name], list) else config[name]
+                         for name in RateConfig.__dataclass_fields__})
+
+
+class SpaceMouseDevice(HandDevice):
+    """A SpaceMouse as a HandDevice: polled at ``rate_hz``, each poll drains the HID reports
+    (or, with ``report_log``, the log's reports due by now, at their recorded timing from
+    the moment the stream starts), integrates the deflections into the virtual hand and
+    returns its pose stamped now. The ``engage_button``'s state goes to
+    /motion_commander/engage at the first report and at every change. Malformed reports are
+    dropped and counted (``rejected``), reports of other kinds counted as ``ignored``.
+    Nothing is published while no device is open (nor before a log's first report)."""
+
+    name = "spacemouse"
+    default_frame_id = "spacemouse"
+    bool_outputs = {"engage": "/motion_commander/engage"}
+    params = ParamSchema([
+        Param("rate_hz", 100.0, unit="Hz", low=0, low_open=True, high=1000, doc="virtual hand poses per second"),
+        Param("full_scale_counts", 350.0, unit="counts", low=0, low_open=True, doc="HID counts at the cap's end stop"),
+        Param("deadzone", 0.08, unit="fraction of full scale", low=0, high=0.99, doc="ignored around the centre"),
+        Param("response_exponent", 2.0, low=0, low_open=True, high=5, doc="1 linear; 2 finer control near centre"),
+        Param("max_speed_mps", 0.15, unit="m/s", low=0, low_open=True, high=2, doc="speed at full deflection"),
+        Param("max_angular_speed_rps", 0.8, unit="rad/s", low=0, low_open=True, high=10,
+              doc="turn rate at full deflection"),
+        Param("workspace_half_size_m", 0.3, unit="m", low=0, low_open=True, high=5, doc="box around the start"),
+        Param("start_position_m", [0.0, 0.0, 0.2], unit="m", length=3, doc="virtual hand start"),
+        Param("max_step_s", 0.05, unit="s", low=0, low_open=True, high=1, doc="longest integrated gap"),
+        Param("hold_timeout_s", 0.25, unit="s", low=0, low_open=True, high=5,
+              doc="a deflection not repeated this long counts as released"),
+        Param("axis_signs", [1, 1, 1, 1, 1, 1], length=6, item_kind=int, low=-1, high=1,
+              doc="x y z rx ry rz in REP 103: 1 or -1"),
+        Param("engage_button", 0, low=-1, high=31, doc="button held = engage; -1 none"),
+        Param("hand_type", "right", choices=("right", "left"), doc="hand.msg hand_type it stands in for"),
+        Param("vendor_id", -1, low=-1, high=0xFFFF, doc="USB vendor id; -1 the first known SpaceMouse"),
+        Param("product_id", -1, low=-1, high=0xFFFF, doc="USB product id; -1 the first known SpaceMouse"),
+        Param("hid_backend", "hidraw", choices=tuple(sorted(HID_BACKENDS)), doc="hidapi backend"),
+        Param("report_log", "", doc="replay this report log (lines 'SECONDS HEX') instead of a device"),
+        Param("record_reports", "", doc="write every report to this log"),
+    ])
+
+    def __init__(self, config, hid_module=None, **kw):
+        super().__init__(config, **kw)
+        if any(sign not in (1, -1) for sign in self.config["axis_signs"]):
+            raise MotionSensorError(f"spacemouse axis_signs must be six values of 1 or -1, "
+                                    f"got {self.config['axis_signs']!r}")
+        self.rate_hz = self.config["rate_hz"]
+        self.integrator = RateIntegrator(rate_config(self.config))
+        self.hand_type = self.config["hand_type"]
+        self.engage_button = self.config["engage_button"]
+        self.report_log = self.config["report_log"]
+        self.decoder = SpaceMouseDecoder()
+        self.engaged = None
+        self.last_report = None
+        self._record = None
+        self._rows, self._next_row, self._log_start = None, 0, None
+        self.reader = None
+        if not self.report_log:
+            vendor, product = self.config["vendor_id"], self.config["product_id"]
+            self.reader = SpaceMouseReader(None, clock=self.clock, hid_module=hid_module,
+                                           vendor_id=None if vendor < 0 else vendor,
+                                           product_id=None if product < 0 else product,
+                                           backend=self.config["hid_backend"])
+            self.counters = self.reader.counters
+
+    def describe(self) -> str:
+        if self.reader is None:
+            return f"replay of {self.report_log}"
+        return self.reader.device_name or "SpaceMouse"
+
+    def open(self) -> None:
+        self.decoder = SpaceMouseDecoder()  # a re-plugged device starts at rest
+        self.last_report = None
+        if self.reader is not None:
+            self.reader.open()
+            self.info(f"{self.reader.device_name} open")
+            return
+        if self._rows is None:
+            try:
+                self._rows = read_report_log(self.report_log)
+            except OSError as exc:
+                raise MotionSensorError(f"cannot replay report_log {self.report_log}: {exc}") from None
+            self.info(f"replaying {len(self._rows)} reports from {self.report_log}")
+        self._log_start = self.clock() - (self._rows[0][0] if self._rows else 0.0)
+
+    def _due_reports(self, now):
+        """(report, received) pairs available now."""
+        if self.reader is None:
+            while self._next_row < len(self._rows) and self._log_start + self._rows[self._next_row][0] <= now:
+                seconds, report = self._rows[self._next_row]
+                self._next_row += 1
+                if self._next_row == len(self._rows):
+                    self.info("report log done")
+                yield list(report), self._log_start + seconds
+            return
+        for _ in range(64):  # at most a poll's worth; the rest waits for the next poll
+            try:
+                report = self.reader.read_report(timeout_ms=1)
+            except (OSError, ValueError) as exc:  # hidapi raises OSError/IOError on unplug
+                raise DeviceUnavailable(f"SpaceMouse: {exc}") from None
+            if not report:
+                return
+            yield report, now
+
+    def on_report(self, report, received: float) -> None:
+        """Apply one HID report (decode, count, record, engage button)."""
+        try:
+            changed = self.decoder.feed(report)
+        except MotionSensorError as exc:
+            self.counters["rejected"] += 1
+            self.warn(f"report dropped: {exc}")
+            return
+        self.counters["reports" if changed else "ignored"] += 1
+        if changed:
+            self.last_report = received
+        if self.config["record_reports"]:
+            if self._record is None:
+                self._record = open(self.config["record_reports"], "w", encoding="utf-8")
+            self._record.write(format_report_line(received, report))
+        if self.engage_button >= 0:
+            pressed = self.decoder.state.button(self.engage_button)
+            if pressed != self.engaged:
+                self.engaged = pressed
+                self.emit("engage", pressed)
+
+    def read(self, now):
+        for report, received in self._due_reports(now):
+            self.on_report(report, received)
+        if self.reader is None and self.last_report is None:
+            return None  # a log publishes from its first report on, as a device from its opening
+        age = float("inf") if self.last_report is None else now - self.last_report
+        position, orientation = self.integrator.update(now, self.decoder.state, age)
+        self.counters["samples"] += 1
+        return HandSample(stamp=now, position=position, orientation=orientation, hands_num=1,
+                          hand_types=(self.hand_type,), frame_id=self.frame_id, device="spacemouse")
+
+    def close(self) -> None:
+        if self.reader is not None:
+            self.reader.close()
+
+    def shutdown(self) -> None:
+        if self._record is not None:
+            self._record.close()
+            self._record = None

@@ -1,0 +1,159 @@
+"""The one ROS node wrapper of every hand device (the only module outside nodes/ that
+imports rospy). A device executable is three lines:
+
+    from motion_sensor.device_node import run_device_node
+    from motion_sensor.devices.leap import LeapDevice
+    run_device_node(LeapDevice, "leap_driver")
+
+It reads the node's private parameters through the device's ParamSchema merged with
+WRAPPER_PARAMS (a bad or unknown key stops the node naming the file, the key and the valid
+keys), waits until the session is ready (``~ready_topic`` True, ``~min_subscribers`` on
+``~topic``, then ``~start_delay``), streams through a DeviceRunner (reconnect with
+backoff, bad samples dropped and counted), publishes motion_sensor/hand on ``~topic``,
+the device's Bool outputs (latched), counters on /diagnostics, and for a finite device a
+latched ``~finished`` (False at start, True at the end, then the node exits).
+"""
+import dataclasses
+
+import rospy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from std_msgs.msg import Bool
+
+from motion_common.errors import ParameterError
+from motion_common.params import Param, ParamSchema
+from motion_common.ros_params import load_private_params
+
+from .device import Backoff, DeviceRunner, HandDevice, wait_until_ready
+from .errors import MotionSensorError
+from motion_sensor.msg import hand
+from .ros_conversions import sample_to_msg
+
+WRAPPER_PARAMS = ParamSchema([
+    Param("topic", "/motion_sensor/raw_hand", doc="motion_sensor/hand output topic"),
+    Param("frame_id", "", doc="header.frame_id of the samples; empty: the device's default"),
+    Param("ready_topic", "", doc="std_msgs/Bool topic; streaming starts once True arrives (empty: do not wait)"),
+    Param("min_subscribers", 0, low=0, doc="streaming starts once ~topic has this many subscribers"),
+    Param("start_delay", 0.0, unit="s", low=0, doc="extra wait after readiness (compatibility; prefer ready_topic)"),
+    Param("backoff_initial_s", 0.25, unit="s", low=0, low_open=True, doc="first reconnect delay"),
+    Param("backoff_max_s", 5.0, unit="s", low=0, low_open=True, doc="longest reconnect delay"),
+    Param("backoff_factor", 2.0, low=1, doc="reconnect delay growth per failed attempt"),
+    Param("diagnostics_period_s", 1.0, unit="s", low=0, low_open=True, doc="/diagnostics period"),
+    Param("queue_size", 10, low=1, doc="publisher queue size"),
+])
+
+
+def node_schema(device_cls) -> ParamSchema:
+    """The device's parameters and the wrapper's, with the device's wrapper defaults."""
+    wrapper = ParamSchema([dataclasses.replace(p, default=device_cls.wrapper_defaults[p.name])
+                           if p.name in device_cls.wrapper_defaults else p for p in WRAPPER_PARAMS.params.values()])
+    return device_cls.params.merged(wrapper)
+
+
+class DeviceNode:
+    """ROS wiring of one HandDevice through a DeviceRunner."""
+
+    def __init__(self, device_cls, node_name: str):
+        self.node_name = node_name
+        self.config = load_private_params(node_schema(device_cls), node_name)
+        try:
+            self.device: HandDevice = device_cls(self.config, clock=rospy.get_time, sleep=rospy.sleep)
+        except (MotionSensorError, ParameterError, OSError) as exc:
+            rospy.logfatal("%s: %s", node_name, exc)
+            raise SystemExit(1) from None
+        self.device.info = lambda text: rospy.loginfo("%s: %s", node_name, text)
+        self.device.warn = lambda text: rospy.logwarn_throttle(5.0, "%s: %s" % (node_name, text))
+        self.publisher = rospy.Publisher(self.config["topic"], hand, queue_size=self.config["queue_size"],
+                                         tcp_nodelay=True)
+        self.bool_pubs = {key: rospy.Publisher(topic, Bool, queue_size=1, latch=True)
+                          for key, topic in device_cls.bool_outputs.items()}
+        self.finished_pub = None
+        if device_cls.finite:
+            self.finished_pub = rospy.Publisher("~finished", Bool, queue_size=1, latch=True)
+            self.finished_pub.publish(Bool(False))
+        self.diag_pub = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=5)
+        self.ready = False
+        self.state = "starting"
+        if self.config["ready_topic"]:
+            rospy.Subscriber(self.config["ready_topic"], Bool, self._on_ready, queue_size=1)
+        backoff = Backoff(self.config["backoff_initial_s"], self.config["backoff_factor"],
+                          max(self.config["backoff_max_s"], self.config["backoff_initial_s"]))
+        self.runner = DeviceRunner(self.device, self._publish, rospy.is_shutdown, backoff,
+                                   publish_bool=lambda key, value: self.bool_pubs[key].publish(Bool(value)))
+        rospy.Timer(rospy.Duration(self.config["diagnostics_period_s"]), self.publish_diagnostics)
+        rospy.on_shutdown(self.device.stop)
+
+    def _on_ready(self, msg):
+        self.ready = bool(msg.data)
+
+    def _publish(self, sample):
+        msg = sample_to_msg(sample)
+        msg.header.stamp = rospy.Time.from_sec(sample.stamp)
+        self.publisher.publish(msg)
+
+    def wait_until_ready(self) -> bool:
+        """Block until the session is ready to receive the stream."""
+        conditions = []
+        if self.config["ready_topic"]:
+            conditions.append((f"True on {self.config['ready_topic']}", lambda: self.ready))
+        wanted = self.config["min_subscribers"]
+        if wanted > 0:
+            conditions.append((f"{wanted} subscriber(s) of {self.publisher.resolved_name}",
+                               lambda: self.publisher.get_num_connections() >= wanted))
+        self.state = "waiting for the session to be ready"
+        ready = wait_until_ready(conditions, rospy.is_shutdown, rospy.get_time, rospy.sleep,
+                                 lambda text: rospy.loginfo("%s: %s", self.node_name, text))
+        if ready and self.config["start_delay"] > 0:
+            rospy.sleep(self.config["start_delay"])
+        return ready and not rospy.is_shutdown()
+
+    def spin(self) -> None:
+        """Wait for readiness, stream, and for a finite device report the end and return."""
+        try:
+            if not self.wait_until_ready():
+                return
+            self.state = "streaming"
+            rospy.loginfo("%s: streaming %s to %s", self.node_name, self.device.describe(),
+                          self.publisher.resolved_name)
+            finished = self.runner.run()
+        except MotionSensorError as exc:
+            rospy.logfatal("%s: %s", self.node_name, exc)
+            raise SystemExit(1) from None
+        finally:
+            self.device.shutdown()
+        if finished:
+            self.state = "finished"
+            rospy.loginfo("%s: %s done, %d samples published", self.node_name, self.device.describe(),
+                          self.device.counters["published"])
+            self.publish_diagnostics(None)
+            if self.finished_pub is not None:
+                self.finished_pub.publish(Bool(True))
+                rospy.sleep(0.5)  # let the latched message reach late subscribers before exiting
+
+    def publish_diagnostics(self, _event):
+        counters = dict(self.device.counters)
+        status = DiagnosticStatus(name=f"motion_sensor: {self.node_name}", hardware_id=self.device.name)
+        if self.device.connected or self.state == "finished":
+            status.level = DiagnosticStatus.OK
+            status.message = (f"{self.device.describe()}: {counters.get('published', 0)} published, "
+                              f"{counters.get('rejected', 0)} rejected, {counters.get('invalid_samples', 0)} invalid")
+        else:
+            status.level = DiagnosticStatus.WARN
+            problem = self.runner.last_problem
+            status.message = (f"{self.device.describe()}: not connected" + (f" ({problem})" if problem else "")
+                              if self.state == "streaming" else f"{self.device.describe()}: {self.state}")
+        status.values = [KeyValue(key=str(k), value=str(v)) for k, v in sorted(counters.items())]
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = rospy.Time.now()
+        self.diag_pub.publish(array)
+
+
+def run_device_node(device_cls, node_name: str) -> None:
+    """The whole life of a device node: init, parameters, readiness, stream, exit."""
+    rospy.init_node(node_name)
+    node = DeviceNode(device_cls, node_name)
+    try:
+        node.spin()
+        if not node.runner.finished and not rospy.is_shutdown():
+            rospy.spin()
+    except rospy.ROSInterruptException:
+        pass
