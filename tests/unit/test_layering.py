@@ -26,7 +26,7 @@ ALLOWED = {
 }
 # Application packages (teach, vision, kitting, dashboard) go here as they arrive: they
 # may import everything in ALLOWED, and no package may import them.
-APPLICATIONS = set()
+APPLICATIONS = {"motion_apps"}
 
 
 def framework_packages():
