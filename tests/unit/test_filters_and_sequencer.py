@@ -230,3 +230,14 @@ def test_sequencer_output_is_always_finite_and_unit(steps, name):
         out = seq.process(sample(t, position=(x, y, z)), now=t)
         if out is not None:
             assert np.all(np.isfinite(out.position)) and np.linalg.norm(out.orientation) == pytest.approx(1.0)
+
+
+def test_bad_gesture_fields_are_dropped_and_counted():
+    from motion_sensor.sequencer import validate_sample
+    good = HandSample(stamp=1.0, position=np.zeros(3), orientation=np.array([0, 0, 0, 1.0]),
+                      grab_strength=0.5, pinch_strength=-1.0, index_tip=np.array([0.1, 0, 0]))
+    assert validate_sample(good) is None
+    for field, value in [("grab_strength", 1.5), ("pinch_strength", float("nan")), ("confidence", -0.5),
+                         ("index_tip", np.array([np.inf, 0, 0]))]:
+        bad = HandSample(stamp=1.0, position=np.zeros(3), orientation=np.array([0, 0, 0, 1.0]), **{field: value})
+        assert validate_sample(bad) == "bad_hand_field", field

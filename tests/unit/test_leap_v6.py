@@ -133,3 +133,29 @@ def test_unreadable_recording_says_what_to_do(tmp_path):
         read_recording(str(path))
     with pytest.raises(MotionSensorError, match="cannot read"):
         read_recording(str(tmp_path / "missing.jsonl.gz"))
+
+
+def test_gesture_fields_come_from_the_protocol():
+    """grabStrength / pinchStrength of the hand and the index tip of its pointables."""
+    recording = read_recording(os.path.join(DATA, "grab.jsonl.gz"))
+    samples = [frame_to_sample(f, f.timestamp) for f in recording.frames]
+    samples = [s for s in samples if s is not None]
+    grabs = np.array([s.grab_strength for s in samples])
+    assert np.all((grabs >= 0) & (grabs <= 1))
+    assert grabs.max() > 0.9 and grabs.min() < 0.2, "the grab recording closes and opens the hand"
+    assert all(0 <= s.pinch_strength <= 1 and 0 <= s.confidence <= 1 for s in samples)
+    tips = [s for s in samples if s.index_tip is not None]
+    assert len(tips) > 0.9 * len(samples)
+    reach = [np.linalg.norm(s.index_tip - s.position) for s in tips]
+    assert 0.03 < np.median(reach) < 0.15, "the index tip lies a finger's length from the palm"
+
+
+def test_missing_gesture_fields_read_as_unknown_and_bad_ones_are_named():
+    sample = frame_to_sample(parse_message(frame([hand()])), 1.0)
+    assert sample.grab_strength == -1.0 and sample.pinch_strength == -1.0 and sample.index_tip is None
+    tip = {"type": 1, "handId": 7, "tipPosition": [10.0, 250.0, -100.0]}
+    sample = frame_to_sample(parse_message(frame([hand(grabStrength=1.0, pinchStrength=0.25)], pointables=[tip])), 1.0)
+    assert sample.grab_strength == 1.0 and sample.pinch_strength == 0.25
+    np.testing.assert_allclose(sample.index_tip, LEAP_TO_REP103 @ np.array([10.0, 250.0, -100.0]) / 1000)
+    with pytest.raises(MotionSensorError, match="grabStrength"):
+        parse_message(frame([hand(grabStrength=1.7)]))

@@ -1,8 +1,11 @@
 """HandSample: the ROS-free form of one motion_sensor/hand message."""
 from dataclasses import dataclass, field
-from typing import Tuple
+from typing import Optional, Tuple
 
 import numpy as np
+
+#: The value of confidence / grab_strength / pinch_strength a device cannot measure.
+UNKNOWN = -1.0
 
 
 @dataclass
@@ -12,6 +15,8 @@ class HandSample:
     ``stamp`` is in seconds (the ROS header stamp), ``orientation`` is a unit quaternion
     (x, y, z, w). ``hand_id`` identifies the tracked hand across frames when the device
     provides it (-1 otherwise); ``device`` names the device that produced the frame.
+    ``confidence``, ``grab_strength`` and ``pinch_strength`` are 0-1, or UNKNOWN (-1) when
+    the device cannot tell; ``index_tip`` is the index finger tip (m) or None.
     """
 
     stamp: float
@@ -23,6 +28,10 @@ class HandSample:
     hand_id: int = -1
     device: str = ""
     extra: dict = field(default_factory=dict)
+    confidence: float = -1.0
+    grab_strength: float = -1.0
+    pinch_strength: float = -1.0
+    index_tip: Optional[np.ndarray] = None
 
     @property
     def primary_type(self) -> str:

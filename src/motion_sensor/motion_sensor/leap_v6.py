@@ -35,6 +35,9 @@ class LeapHand:
     position: np.ndarray
     orientation: np.ndarray
     stabilized_position: Optional[np.ndarray]
+    grab_strength: float = -1.0            # 0 open .. 1 fist; -1 when the frame lacks it
+    pinch_strength: float = -1.0           # 0 apart .. 1 touching; -1 when the frame lacks it
+    index_tip: Optional[np.ndarray] = None  # m, REP 103; from the frame's pointables
 
 
 @dataclass
@@ -81,6 +84,35 @@ def palm_orientation(palm_normal_leap: np.ndarray, direction_leap: np.ndarray) -
     return Rotation.from_matrix(np.column_stack([x_axis, y_axis, z_axis])).as_quat()
 
 
+def _strength(hand: dict, key: str) -> float:
+    """A 0-1 strength field, or -1 (unknown) when absent."""
+    if key not in hand:
+        return -1.0
+    value = hand[key]
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not 0.0 <= value <= 1.0:
+        raise MotionSensorError(f"hand field '{key}' must be a number in [0, 1], got {value!r:.40}")
+    return float(value)
+
+
+INDEX_FINGER = 1  # Leap pointable type: 0 thumb, 1 index, 2 middle, 3 ring, 4 pinky
+
+
+def index_tips(pointables) -> dict:
+    """{hand id: index finger tip (m, REP 103)} from a frame's pointables; bad ones skipped
+    (a pointable is optional detail: it never costs the frame)."""
+    tips = {}
+    if not isinstance(pointables, list):
+        return tips
+    for pointable in pointables:
+        if not isinstance(pointable, dict) or pointable.get("type") != INDEX_FINGER:
+            continue
+        try:
+            tips[pointable.get("handId")] = LEAP_TO_REP103 @ _vector(pointable, "tipPosition") / 1000.0
+        except MotionSensorError:
+            continue
+    return tips
+
+
 def parse_hand(hand: dict) -> LeapHand:
     """Convert one Leap v6 hand object; raise MotionSensorError naming the bad field."""
     if not isinstance(hand, dict):
@@ -99,7 +131,8 @@ def parse_hand(hand: dict) -> LeapHand:
     stabilized = None
     if "stabilizedPalmPosition" in hand:
         stabilized = LEAP_TO_REP103 @ _vector(hand, "stabilizedPalmPosition") / 1000.0
-    return LeapHand(hand_id, hand_type, float(confidence), position, orientation, stabilized)
+    return LeapHand(hand_id, hand_type, float(confidence), position, orientation, stabilized,
+                    _strength(hand, "grabStrength"), _strength(hand, "pinchStrength"))
 
 
 def parse_message(text, max_bytes: int = MAX_MESSAGE_BYTES) -> Optional[LeapFrame]:
@@ -130,7 +163,11 @@ def parse_message(text, max_bytes: int = MAX_MESSAGE_BYTES) -> Optional[LeapFram
     frame_id = obj.get("id", -1)
     if not isinstance(frame_id, int) or isinstance(frame_id, bool):
         raise MotionSensorError(f"frame field 'id' must be an integer, got {frame_id!r:.40}")
-    return LeapFrame(frame_id, timestamp * 1e-6, [parse_hand(h) for h in hands])
+    parsed = [parse_hand(h) for h in hands]
+    tips = index_tips(obj.get("pointables"))
+    for leap_hand in parsed:
+        leap_hand.index_tip = tips.get(leap_hand.hand_id)
+    return LeapFrame(frame_id, timestamp * 1e-6, parsed)
 
 
 def select_primary(frame: LeapFrame, preference: str = "right") -> Optional[LeapHand]:
@@ -162,7 +199,9 @@ def frame_to_sample(frame: LeapFrame, stamp: float, preference: str = "right",
     return HandSample(stamp=stamp, position=primary.position, orientation=primary.orientation,
                       hands_num=len(frame.hands), hand_types=tuple([primary.hand_type] + others),
                       frame_id=frame_id, hand_id=primary.hand_id, device="leap",
-                      extra={"confidence": primary.confidence, "device_time": frame.timestamp})
+                      extra={"confidence": primary.confidence, "device_time": frame.timestamp},
+                      confidence=primary.confidence, grab_strength=primary.grab_strength,
+                      pinch_strength=primary.pinch_strength, index_tip=primary.index_tip)
 
 
 @dataclass

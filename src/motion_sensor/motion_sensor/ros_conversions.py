@@ -19,12 +19,22 @@ def sample_to_msg(sample: HandSample) -> hand:
     msg.position.x, msg.position.y, msg.position.z = (float(v) for v in sample.position)
     o = msg.orientation
     o.x, o.y, o.z, o.w = (float(v) for v in sample.orientation)
+    msg.hand_id = int(sample.hand_id)
+    msg.confidence = float(sample.confidence)
+    msg.grab_strength = float(sample.grab_strength)
+    msg.pinch_strength = float(sample.pinch_strength)
+    if sample.index_tip is not None:
+        msg.index_tip.x, msg.index_tip.y, msg.index_tip.z = (float(v) for v in sample.index_tip)
+        msg.index_tip_known = True
     return msg
 
 
 def msg_to_sample(msg: hand, device: str = "") -> HandSample:
     """HandSample of a motion_sensor/hand message (stamp in seconds)."""
-    p, o = msg.position, msg.orientation
+    p, o, tip = msg.position, msg.orientation, msg.index_tip
     return HandSample(stamp=msg.header.stamp.to_sec(), position=np.array([p.x, p.y, p.z]),
                       orientation=np.array([o.x, o.y, o.z, o.w]), hands_num=msg.hands_num,
-                      hand_types=tuple(msg.hand_type), frame_id=msg.header.frame_id, device=device)
+                      hand_types=tuple(msg.hand_type), frame_id=msg.header.frame_id, device=device,
+                      hand_id=msg.hand_id, confidence=msg.confidence, grab_strength=msg.grab_strength,
+                      pinch_strength=msg.pinch_strength,
+                      index_tip=np.array([tip.x, tip.y, tip.z]) if msg.index_tip_known else None)

@@ -145,6 +145,14 @@ def validate_sample(sample: HandSample) -> Optional[str]:
         return "hands_num_mismatch"
     if sample.stamp <= 0:
         return "bad_stamp"
+    for value in (sample.confidence, sample.grab_strength, sample.pinch_strength):
+        # 0-1, or the documented unknown value -1.
+        if not (np.isfinite(value) and (value == -1.0 or 0.0 <= value <= 1.0)):
+            return "bad_hand_field"
+    if sample.index_tip is not None:
+        tip = np.asarray(sample.index_tip, dtype=float)
+        if tip.shape != (3,) or not np.all(np.isfinite(tip)):
+            return "bad_hand_field"
     return None
 
 
