@@ -1,0 +1,113 @@
+"""STOP reaction of the hardware layer: from a STOP request (another thread) during a ~3 s
+blocking MoveJ to (a) the interrupted move's answer and (b) the arm being still, for the
+pybullet driver and the UR driver on its real-time fake controller (ur_rtde_fake), through
+the CommandDispatcher (what motion_controller_server runs), p50/p99 over N trials.
+
+"Still": sim, every measured joint speed below 0.01 rad/s and staying so (pybullet's
+position servo rings down); fake, the fake controller reports no joint moving (the end of
+stopJ's deceleration, 2 rad/s^2 by default, from the speed reached when STOP arrived).
+
+Run: bench/run stop_bench [--trials 20]; writes bench/results/stop_bench.json.
+"""
+import argparse
+import os
+import sys
+import threading
+import time
+
+import numpy as np
+
+from bench_common import write_results
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.join(ROOT, "src", "hw_interface"))
+sys.path.insert(0, os.path.join(ROOT, "src", "motion_common"))
+URDF = os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf")
+HOME = np.array([0.0, -1.5707963, 1.5707963, -1.5707963, -1.5707963, 0.0])
+LONG = HOME + [2.8, 0.0, 0.0, 0.0, 0.0, 0.0]
+
+
+def stats(samples):
+    ms = np.asarray(samples) * 1e3
+    return {"p50_ms": round(float(np.percentile(ms, 50)), 2), "p99_ms": round(float(np.percentile(ms, 99)), 2),
+            "max_ms": round(float(ms.max()), 2), "n": int(len(ms))}
+
+
+def make(name):
+    from hw_interface.registry import create_driver
+    if name == "pybullet":
+        driver = create_driver("pybullet", urdf_path=URDF, initial_joints=list(HOME), real_time=True)
+        still = lambda: np.max(np.abs(driver.get_joint_velocities())) < 0.01
+    else:
+        driver = create_driver("ur_rtde_fake", urdf_path=URDF, initial_joints=list(HOME))
+        still = lambda: not driver.fake.is_moving()
+    driver.login()
+    return driver, still
+
+
+def trial(dispatcher, driver, still, rng):
+    from hw_interface.protocol import CommandIndex, Result
+    answer = dispatcher.handle(CommandIndex.MOVE_J, joints=list(HOME))
+    assert answer.result == Result.SUCCESS, answer.reason
+    box = {}
+
+    def move():
+        box["answer"] = dispatcher.handle(CommandIndex.MOVE_J, joints=list(LONG))
+        box["at"] = time.perf_counter()
+
+    thread = threading.Thread(target=move)
+    thread.start()
+    # STOP at a random moment 0.3-1.5 s into the move (accelerating or cruising).
+    time.sleep(rng.uniform(0.3, 1.5))
+    stop_at = time.perf_counter()
+    dispatcher.handle(CommandIndex.STOP)
+    stop_answered = time.perf_counter()
+    # Still: the first instant from which the arm stays still for 0.1 s.
+    still_since = None
+    while True:
+        now = time.perf_counter()
+        if still():
+            still_since = still_since or now
+            if now - still_since >= 0.1:
+                break
+        else:
+            still_since = None
+        if now - stop_at > 5.0:
+            raise RuntimeError("the arm never came to rest")
+        time.sleep(0.001)
+    thread.join(5.0)
+    assert box["answer"].result == Result.INTERRUPTED, box["answer"].reason
+    return box["at"] - stop_at, stop_answered - stop_at, still_since - stop_at
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--trials", type=int, default=20, help="STOPs per driver (default 20)")
+    args = parser.parse_args()
+    from hw_interface.dispatcher import CommandDispatcher
+    rng = np.random.default_rng(7)
+    results = {}
+    for name in ("pybullet", "ur_rtde_fake"):
+        driver, still = make(name)
+        dispatcher = CommandDispatcher(driver)
+        move_answer, stop_answer, to_still = [], [], []
+        print(f"{name}: {args.trials} STOPs during a blocking MoveJ...", flush=True)
+        try:
+            for _ in range(args.trials):
+                a, s, t = trial(dispatcher, driver, still, rng)
+                move_answer.append(a)
+                stop_answer.append(s)
+                to_still.append(t)
+        finally:
+            driver.disconnect()
+        results[name] = {"stop_request_to_stop_answer": stats(stop_answer),
+                         "stop_request_to_interrupted_move_answer": stats(move_answer),
+                         "stop_request_to_arm_still": stats(to_still)}
+    results["machine"] = {"cores": os.cpu_count()}
+    results["note"] = ("in-process through CommandDispatcher; the fake's time to still is stopJ's deceleration "
+                       "(2 rad/s^2) from the speed at the STOP")
+    write_results("stop_bench", results)
+
+
+if __name__ == "__main__":
+    main()
