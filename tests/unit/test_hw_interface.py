@@ -11,7 +11,7 @@ from hw_interface.dispatcher import CommandDispatcher, Workspace
 from hw_interface.errors import HwInterfaceError
 from hw_interface.protocol import CommandIndex, Result
 from hw_interface.registry import available_drivers, create_driver, register_driver
-from hw_interface.robot_hw import RobotDriver
+from hw_interface.robot_hw import DriverStatus, RobotDriver
 from hw_interface.sim_driver import PybulletSimDriver
 
 SRV = os.path.join(ROOT, "src", "motion_commander", "srv", "commander.srv")
@@ -136,3 +136,56 @@ def test_registry_finds_builtin_and_registered_drivers():
         create_driver("kuka_magic")
     with pytest.raises(HwInterfaceError, match="bad parameters"):
         create_driver("pybullet", urdf=UR5E)
+
+
+class LaggingServo(RobotDriver):
+    """A robot whose measured joints stay where they are (a servo that lags its stream)."""
+
+    name = "lagging"
+    joint_names = [f"j{i}" for i in range(6)]
+    joint_limits = (np.full(6, -6.0), np.full(6, 6.0))
+
+    def __init__(self):
+        self.q = np.zeros(6)
+        self.targets = []
+
+    def get_robots(self): return [("lagging", 6)]
+    def login(self, url, user="", password=""): pass
+    def disconnect(self): pass
+    def get_robot_joints(self): return self.q.copy()
+    def get_robot_cartesian_position(self): return np.zeros(3), np.array([0, 0, 0, 1.0])
+    def set_joints(self, joints): self.targets.append(np.array(joints))
+    def move_j(self, joints, timeout=30.0): self.q = np.array(joints, float)
+    def move_l(self, position, orientation, timeout=30.0): pass
+    def stop(self): pass
+    def set_gripper(self, closed): pass
+    def set_digital_output(self, output, value): pass
+    def status(self): return DriverStatus(connected=True)
+
+
+def test_a_stream_is_checked_step_by_step_and_bounded_ahead_of_a_lagging_robot():
+    now = [0.0]
+    robot = LaggingServo()
+    dispatcher = CommandDispatcher(robot, max_stream_step=0.2, max_stream_lag=0.6, clock=lambda: now[0])
+    stream = lambda q: dispatcher.handle(CommandIndex.SET_JOINTS, joints=[q, 0, 0, 0, 0, 0]).result
+    # Steps of 0.15 rad from the previous target are accepted although the robot lags behind...
+    results = []
+    for i in range(1, 5):
+        now[0] += 0.01
+        results.append(stream(0.15 * i))
+    assert results == [Result.SUCCESS] * 4 and len(robot.targets) == 4
+    # ... until the stream runs more than max_stream_lag ahead of the measured joints.
+    now[0] += 0.01
+    assert stream(0.75) == Result.TOO_FAR and len(robot.targets) == 4
+    # A jump back from the last target (0.6) is refused even though it is close to the robot.
+    now[0] += 0.01
+    assert stream(0.05) == Result.TOO_FAR
+    assert robot.targets[-1][0] == pytest.approx(0.6)
+    # After a STOP the next target is compared with the robot again.
+    dispatcher.handle(CommandIndex.STOP)
+    now[0] += 0.01
+    assert stream(0.5) == Result.TOO_FAR
+    assert stream(0.1) == Result.SUCCESS
+    # A pause longer than the stream timeout restarts from the measured joints too.
+    now[0] += 1.0
+    assert stream(0.25) == Result.TOO_FAR

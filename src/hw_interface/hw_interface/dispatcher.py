@@ -45,6 +45,9 @@ class CommandResult:
     robots: Sequence = ()
 
 
+# s: a streamed target arriving later than this after the previous one starts a new stream,
+# compared with the measured joints (teleop streams at 30-500 Hz; a pause means a new start).
+STREAM_REFERENCE_TIMEOUT = 0.25
 MOTION_COMMANDS = (CommandIndex.SET_JOINTS, CommandIndex.MOVE_J, CommandIndex.MOVE_L)
 
 #: How to release a latched stop, for refusal messages.
@@ -64,12 +67,22 @@ class CommandDispatcher:
     """Validates and executes commander.srv requests on one driver (thread-safe)."""
 
     def __init__(self, driver: RobotDriver, workspace: Optional[Workspace] = None,
-                 max_stream_step: float = 0.2, user: str = "", password: str = "", move_timeout: float = 30.0):
+                 max_stream_step: float = 0.2, user: str = "", password: str = "", move_timeout: float = 30.0,
+                 max_stream_lag: float = 0.6, clock=time.monotonic):
         self.driver = driver
         self.workspace = workspace or Workspace()
         # Largest joint change (rad) one streamed SetJoints may ask for: teleop streams
         # small steps, so a bigger one is a jump the robot must never execute.
         self.max_stream_step = float(max_stream_step)
+        # A servo follows its stream with a delay (ur_rtde servoJ: about lookahead_time), so
+        # while streaming each target is compared with the previous accepted one, not with
+        # the lagging measured joints; the lag itself is bounded separately, so a stream
+        # can never run away from a robot that does not follow.
+        self.max_stream_lag = float(max_stream_lag)
+        self._clock = clock
+        self._stream_lock = threading.Lock()  # service threads stream concurrently
+        self._stream_reference: Optional[np.ndarray] = None
+        self._stream_time = float("-inf")
         self._user = user
         self._password = password
         self._blocking_motion = threading.Lock()
@@ -119,6 +132,7 @@ class CommandDispatcher:
         with self._gate:
             self._stop_epoch += 1
             epoch, in_flight = self._stop_epoch, self._in_flight
+        self._note_stream(None)  # after a stop, a stream restarts from where the robot is
         stop_driver(self.driver, reason)
         if in_flight:
             threading.Thread(target=self._restop, args=(epoch, reason), name="restop", daemon=True).start()
@@ -197,11 +211,26 @@ class CommandDispatcher:
             return Result.JOINT_LIMIT, f"joints {names} outside their limits"
         if command == CommandIndex.SET_JOINTS:
             current = self.driver.get_robot_joints()
-            step = float(np.max(np.abs(q - current)))
+            with self._stream_lock:
+                fresh = self._clock() - self._stream_time <= STREAM_REFERENCE_TIMEOUT
+                reference = self._stream_reference if fresh and self._stream_reference is not None else None
+            against = "the last streamed target" if reference is not None else "the robot"
+            step = float(np.max(np.abs(q - (current if reference is None else reference))))
             if step > self.max_stream_step:
-                return Result.TOO_FAR, (f"SET_JOINTS target is {step:.3f} rad from the robot (limit "
+                return Result.TOO_FAR, (f"SET_JOINTS target is {step:.3f} rad from {against} (limit "
                                         f"{self.max_stream_step:.3f}); use MOVE_J for large motions")
+            lag = float(np.max(np.abs(q - current)))
+            if lag > self.max_stream_lag:
+                return Result.TOO_FAR, (f"SET_JOINTS target is {lag:.3f} rad ahead of the robot (limit "
+                                        f"{self.max_stream_lag:.3f}): the robot is not following the stream; "
+                                        "slow the stream down or check the robot")
         return None
+
+    def _note_stream(self, target: Optional[np.ndarray]) -> None:
+        """Remember the last accepted streamed target (None: the stream was broken off)."""
+        with self._stream_lock:
+            self._stream_reference = target
+            self._stream_time = self._clock() if target is not None else float("-inf")
 
     def _check_pose(self, position, orientation):
         if len(position) != 3 or len(orientation) != 4:
@@ -240,7 +269,9 @@ class CommandDispatcher:
             raise HwInterfaceError("the robot is in a protective stop; clear it, then command again",
                                    Result.PROTECTIVE_STOP)
         elif command == CommandIndex.SET_JOINTS:
-            driver.set_joints(np.asarray(joints, dtype=float))
+            target = np.asarray(joints, dtype=float)
+            driver.set_joints(target)
+            self._note_stream(target)
         elif command == CommandIndex.STOP:
             self._stop("STOP")
         elif command == CommandIndex.SET_GRIPPER:
@@ -250,6 +281,7 @@ class CommandDispatcher:
         elif command in (CommandIndex.MOVE_J, CommandIndex.MOVE_L):
             if not self._blocking_motion.acquire(blocking=False):
                 raise HwInterfaceError("another MOVE_J/MOVE_L is running; wait or send STOP", Result.BUSY)
+            self._note_stream(None)  # a new stream after this move starts from the measured joints
             try:
                 if command == CommandIndex.MOVE_J:
                     driver.move_j(np.asarray(joints, dtype=float), timeout=self.move_timeout)

@@ -22,6 +22,8 @@ SERVER_PARAMETERS = ParamSchema([
     Param("publish_rate", 100.0, "Hz", "/joint_states and /motion_controller/tool_pose rate", low=1.0, high=1000.0),
     Param("max_stream_step", 0.2, "rad", "largest joint change one SET_JOINTS may ask for", low=0.0, high=3.2,
           low_open=True),
+    Param("max_stream_lag", 0.6, "rad", "largest distance a SET_JOINTS target may run ahead of the measured "
+          "joints (a servo follows with a delay)", low=0.0, high=6.3, low_open=True),
     Param("move_timeout", 60.0, "s", "longest a MOVE_J/MOVE_L may run before the robot is stopped and "
           "TIMEOUT answered", low=0.0, high=3600.0, low_open=True),
     Param("workspace_min", [-2.0, -2.0, 0.0], "m", "tool position box, lower corner (base frame)", length=3),
