@@ -280,3 +280,15 @@ def test_malformed_rows_are_skipped_with_a_reason(tmp_path):
     item = read_path(str(path))
     assert len(item.points) == 2 and len(item.skipped) == 3
     assert any("not numbers" in s for s in item.skipped) and any("3 values" in s for s in item.skipped)
+
+
+def test_a_fist_is_not_a_pinch_clutch():
+    """Leap reports a closed fist as pinched too: carrying a part must draw no gesture."""
+    classifier = load_classifier(DEFAULT_TEMPLATES)
+    rng = np.random.default_rng(3)
+    path, _ = make_gesture_templates.gesture_path("swipe_up", rng, 90.0)
+    frames = [GestureFrame(i / 90.0, p, pinch=1.0, grab=1.0 if 5 <= i < len(path) - 5 else 0.0)
+              for i, p in enumerate(path)]
+    spotter = GestureSpotter(classifier, {"mode": "clutch"})
+    assert [e.name for f in frames for e in spotter.update(f)] == []
+    assert any(s.reason == "a fist, not a pinch" for s in spotter.segments)

@@ -189,3 +189,25 @@ def test_a_stream_is_checked_step_by_step_and_bounded_ahead_of_a_lagging_robot()
     # A pause longer than the stream timeout restarts from the measured joints too.
     now[0] += 1.0
     assert stream(0.25) == Result.TOO_FAR
+
+
+def test_sim_scene_reset_puts_part_arm_and_gripper_back():
+    scene = [{"name": "table", "box": [0.2, 0.32, 0.1], "position": [-0.5, -0.04, 0.1], "mass": 0.0},
+             {"name": "part", "box": [0.015, 0.015, 0.015], "position": [-0.5, -0.2, 0.215], "mass": 0.05}]
+    driver = PybulletSimDriver(UR5E, initial_joints=HOME, real_time=False, scene=scene)
+    driver.login("sim://")
+    try:
+        down = [0.70710678, 0.70710678, 0.0, 0.0]
+        driver.move_l([-0.5, -0.2, 0.33], down)
+        driver.move_l([-0.5, -0.2, 0.238], down)
+        driver.set_gripper(True)
+        driver.move_l([-0.45, 0.1, 0.33], down)
+        carried = driver.scene_poses()["part"][0]
+        np.testing.assert_allclose(carried[:2], [-0.45, 0.1], atol=0.003)
+        driver.reset_scene()
+        wait_sim(driver, 0.3)
+        assert driver.gripped_body is None and not driver.status().gripper
+        np.testing.assert_allclose(driver.scene_poses()["part"][0], [-0.5, -0.2, 0.215], atol=0.002)
+        np.testing.assert_allclose(driver.get_robot_joints(), HOME, atol=1e-3)
+    finally:
+        driver.disconnect()

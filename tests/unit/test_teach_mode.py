@@ -89,7 +89,7 @@ def test_every_ignored_event_says_why(session, robot):
     first = session.on_gesture("wave")
     assert not first.understood and "gesture 'wave' has no teach command" in str(first)
     assert "nothing is gripped" in str(session.on_gesture("open_palm"))
-    assert "no waypoint to undo" in str(session.on_gesture("swipe_right"))
+    assert "no waypoint to undo" in str(session.on_gesture("swipe_left"))
     assert "nothing to save" in str(session.on_gesture("circle"))
     robot.state = False
     assert "no robot pose yet" in str(session.on_gesture("hold_still"))
@@ -118,7 +118,7 @@ def test_undo_removes_the_last_waypoint_and_its_gripper_state(session, robot):
     robot.position = [-0.4, -0.2, 0.05]
     session.on_gesture("fist")
     assert session.gripping
-    undo = session.on_gesture("swipe_right")
+    undo = session.on_gesture("swipe_left")
     assert undo.understood and "removed waypoint 2 'grip2'; 1 left" == str(undo)
     assert not session.gripping
     assert session.on_gesture("fist").understood   # can grip again

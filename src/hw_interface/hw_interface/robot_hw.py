@@ -115,3 +115,19 @@ class UrdfModelMixin:
     def get_robots(self) -> List[Tuple[str, int]]:
         """GetRobots: the one robot this driver drives, with its DOF."""
         return [(self.robot_name, self.kinematics.dof)]
+
+
+class SimulatedScene(abc.ABC):
+    """What a *simulated* driver offers on top of RobotDriver: the true poses of its scene
+    bodies (for demos, benchmarks and tests to measure against) and a reset to the scene's
+    start. A real robot has no such thing; the server exposes these only for drivers that
+    derive from this class."""
+
+    @abc.abstractmethod
+    def scene_poses(self) -> dict:
+        """{body name: (position [m], quaternion x, y, z, w)} in the robot base frame."""
+
+    @abc.abstractmethod
+    def reset_scene(self) -> None:
+        """Release the gripper, put every scene body back at its start pose and the arm at its
+        start joints; any running motion ends INTERRUPTED."""

@@ -15,7 +15,7 @@ from motion_common.params import Param, ParamSchema
 
 from .errors import HwInterfaceError
 from .protocol import Result
-from .robot_hw import DriverStatus, RobotDriver, UrdfModelMixin
+from .robot_hw import DriverStatus, RobotDriver, SimulatedScene, UrdfModelMixin
 from .trajectory import JointPath, joint_move_duration, trapezoid_duration
 
 
@@ -58,7 +58,7 @@ def entry_is_fixed(spec, name) -> bool:
     return False
 
 
-class PybulletSimDriver(UrdfModelMixin, RobotDriver):
+class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
     """Simulated arm. ``login("sim://")`` starts the physics; ``disconnect()`` ends it.
 
     Parameters: ``urdf_path`` of the robot, ``tool_frame`` (a link name), ``gui``,
@@ -336,6 +336,33 @@ class PybulletSimDriver(UrdfModelMixin, RobotDriver):
             self._require_connection()
             position, orientation = self._client.getBasePositionAndOrientation(self.bodies[name])
         return np.array(position), np.array(orientation)
+
+    def scene_poses(self) -> dict:
+        """{body name: (position, quaternion)} of every scene body."""
+        with self._lock:
+            self._require_connection()
+            return {name: tuple(np.array(v) for v in self._client.getBasePositionAndOrientation(body))
+                    for name, body in self.bodies.items()}
+
+    def reset_scene(self) -> None:
+        """Gripper released, bodies at their scene-file poses, arm at its start joints."""
+        with self._lock:
+            self._require_connection()
+            if self._path is not None:
+                self._end_path((Result.INTERRUPTED, "motion interrupted by a scene reset"))
+            self._switch_suction(False)
+            self.outputs.clear()
+            for index, entry in enumerate(self.scene_spec):
+                body = self.bodies.get(entry.get("name", f"body{index}"))
+                if body is None:
+                    continue
+                orientation = pybullet.getQuaternionFromEuler(entry.get("rpy", [0.0, 0.0, 0.0]))
+                self._client.resetBasePositionAndOrientation(body, entry.get("position", [0.0, 0.0, 0.0]),
+                                                             orientation)
+                self._client.resetBaseVelocity(body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+            for joint, value in zip(self._joint_indices, self._initial):
+                self._client.resetJointState(self._body, joint, float(value))
+            self._target = self._initial.copy()
 
     # -- internals -------------------------------------------------------------------------
     def _current_command(self) -> np.ndarray:

@@ -1,7 +1,7 @@
 """Teach mode: gesture events in, waypoints and operator feedback out (plain Python).
 
 A teach node (the ROS edge) feeds ``TeachSession.on_gesture(name, stamp)`` with every
-recognised gesture (fist, open_palm, hold_still, swipe_right, circle, ...); the gesture is
+recognised gesture (fist, open_palm, hold_still, swipe_left, circle, ...); the gesture is
 mapped to a teach command by ``config/gesture_commands.yaml`` (``load_gesture_config``)
 and handled by ``TeachSession.handle_command(command, stamp)``:
 
@@ -36,7 +36,7 @@ from .program import Program, ProgramError, Waypoint, save_program
 COMMANDS = ("mark_waypoint", "grip", "release", "undo", "save")
 DEFAULT_PROGRAMS_DIR = os.path.join("output", "programs")
 DEFAULT_GESTURES = {"hold_still": "mark_waypoint", "fist": "grip", "open_palm": "release",
-                    "swipe_right": "undo", "circle": "save"}
+                    "swipe_left": "undo", "circle": "save"}
 
 GESTURE_SCHEMA = ParamSchema([
     Param("commands", dict(DEFAULT_GESTURES), doc="recognised gesture name -> teach command " + "|".join(COMMANDS)),

@@ -7,22 +7,18 @@ device gives it, the index fingertip (m). ``GestureEvent`` is what they emit: a 
 confidence in [0, 1] and the stamp of the frame that completed it.
 
 ``frames_from_recording`` turns a Leap v6 recording (``.jsonl[.gz]``, as read by
-``leap_v6``) into GestureFrames: the palm comes from ``leap_v6.parse_message`` /
-``frame_to_sample`` (metres, REP 103); grab, pinch and the index tip (pointable type 1 of
-the primary hand) are read from the same JSON line, since LeapFrame does not keep them.
+``leap_v6``) into GestureFrames, and ``frame_from_sample`` a HandSample (what a
+motion_sensor/hand message carries) into one.
 """
 import gzip
-import json
 from dataclasses import dataclass
 from typing import List, Optional
 
 import numpy as np
 
 from .errors import MotionSensorError
-from .leap_v6 import LEAP_TO_REP103, frame_to_sample, parse_message, select_primary
-
-UNKNOWN = -1.0
-INDEX_FINGER = 1  # Leap pointable type of the index finger
+from .hand_sample import UNKNOWN, HandSample
+from .leap_v6 import frame_to_sample, parse_message
 
 
 @dataclass
@@ -54,11 +50,12 @@ class GestureEvent:
     info: Optional[dict] = None
 
 
-def _strength(hand: dict, key: str) -> float:
-    value = hand.get(key)
-    if isinstance(value, (int, float)) and not isinstance(value, bool) and 0.0 <= value <= 1.0:
-        return float(value)
-    return UNKNOWN
+def frame_from_sample(sample: HandSample) -> GestureFrame:
+    """GestureFrame of a HandSample: palm, grab, pinch, hands and the index tip."""
+    return GestureFrame(stamp=sample.stamp, palm=np.asarray(sample.position, dtype=float),
+                        grab=float(sample.grab_strength), pinch=float(sample.pinch_strength),
+                        hands_num=int(sample.hands_num),
+                        index_tip=None if sample.index_tip is None else np.asarray(sample.index_tip, dtype=float))
 
 
 def frame_from_json(line, stamp: Optional[float] = None, preference: str = "right") -> Optional[GestureFrame]:
@@ -69,9 +66,7 @@ def frame_from_json(line, stamp: Optional[float] = None, preference: str = "righ
     if parsed is None:
         return None
     sample = frame_to_sample(parsed, parsed.timestamp if stamp is None else stamp, preference)
-    if sample is None:
-        return None
-    return _with_raw(parsed, json.loads(line), sample, preference)
+    return None if sample is None else frame_from_sample(sample)
 
 
 def frames_from_recording(path: str, preference: str = "right") -> List[GestureFrame]:
@@ -93,19 +88,3 @@ def frames_from_recording(path: str, preference: str = "right") -> List[GestureF
     except (OSError, EOFError, UnicodeDecodeError) as exc:
         raise MotionSensorError(f"cannot read Leap recording {path}: {exc}") from None
     return frames
-
-
-def _with_raw(parsed, obj, sample, preference) -> GestureFrame:
-    primary = select_primary(parsed, preference)
-    raw = next((h for h in obj.get("hands", []) if h.get("id") == primary.hand_id), {})
-    tip = None
-    for pointable in obj.get("pointables", []) or []:
-        if pointable.get("type") == INDEX_FINGER and pointable.get("handId") == primary.hand_id:
-            value = pointable.get("tipPosition")
-            if isinstance(value, list) and len(value) == 3 and all(
-                    isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
-                tip = LEAP_TO_REP103 @ np.asarray(value, dtype=float) / 1000.0
-            break
-    return GestureFrame(stamp=sample.stamp, palm=np.asarray(sample.position, dtype=float),
-                        grab=_strength(raw, "grabStrength"), pinch=_strength(raw, "pinchStrength"),
-                        hands_num=sample.hands_num, index_tip=tip)

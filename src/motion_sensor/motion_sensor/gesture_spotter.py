@@ -47,6 +47,8 @@ SPOTTER_PARAMS = ParamSchema([
     Param("clutch", "pinch", "", "clutch pose in clutch mode", choices=("pinch", "grab")),
     Param("clutch_on", 0.8, "", "strength that engages the clutch", low=0.0, high=1.0),
     Param("clutch_off", 0.6, "", "strength under which the clutch releases", low=0.0, high=1.0),
+    Param("clutch_max_grab", 0.6, "", "pinch clutch: a grab this strong is a fist, not a pinch (Leap reports "
+          "a fist as pinched too)", low=0.0, high=1.0),
     Param("speed_window_s", 0.05, "s", "window of the speed estimate", low=0.0, low_open=True),
     Param("max_gap_s", 0.25, "s", "a longer frame gap drops the segment", low=0.0, low_open=True),
     Param("min_confidence", 0.0, "", "reject labels with a smaller margin to the next class", low=0.0, high=1.0),
@@ -165,6 +167,14 @@ class GestureSpotter:
     def _update_clutch(self, frame, stamp, point) -> List[GestureEvent]:
         p = self.params
         strength = frame.pinch if p["clutch"] == "pinch" else frame.grab
+        if p["clutch"] == "pinch" and frame.grab >= p["clutch_max_grab"]:
+            # A closed hand also reads as pinched: carrying a part with a fist must not
+            # draw gestures. Whatever was recorded is dropped, not classified.
+            if self._clutched:
+                self._clutched, self._recording = False, []
+                self.last_segment = Segment(np.array([]), np.zeros((0, 3)), None, False, "a fist, not a pinch")
+                self.segments.append(self.last_segment)
+            return []
         if strength < 0:  # unknown: keep the state
             if self._clutched:
                 self._recording.append((stamp, point))
