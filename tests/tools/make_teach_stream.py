@@ -6,7 +6,7 @@ The stream is a Leap v6 recording (what a Leap service sends) of an operator tea
 pick-and-place by gesture, for the cell of src/motion_apps/config/teach_scene.yaml:
 hold still over the start, move above the part, hold, descend, hold, make a FIST (grip),
 lift, hold, carry to above the place, hold, descend, hold, OPEN the hand (release), lift,
-hold, then PINCH and draw a CIRCLE (save), and leave.
+hold, rise clear of the cell, then PINCH and draw a CIRCLE (save), and leave.
 
 Every frame is a real frame of tests/data/{grab,pinch,Waiting-110fps}.jsonl.gz (Leap
 Motion's leapjs-playback recordings, Apache-2.0, see tests/data/README.md): its hand
@@ -45,6 +45,7 @@ ABOVE_PART = np.array([-0.50, -0.20, 0.33]) - START
 AT_PART = np.array([-0.50, -0.20, 0.238]) - START
 ABOVE_PLACE = np.array([-0.45, 0.10, 0.33]) - START
 AT_PLACE = np.array([-0.45, 0.10, 0.240]) - START
+SAVE_POINT = np.array([-0.45, 0.10, 0.46]) - START   # clear above the cell: the circle stays off the table
 
 # (shape, seconds, displacement at the end of the segment or None to stay).
 # Shapes: open, fist, closing, opening, pinch, pinching, unpinching.
@@ -66,10 +67,11 @@ SCRIPT = [
     ("open", 1.2, None),                # open palm held: release
     ("open", 1.2, ABOVE_PLACE),
     ("open", 1.6, None),                # hold: waypoint (retreat)
+    ("open", 1.2, SAVE_POINT),          # up and clear of the cell before drawing
     ("pinching", None, None),           # the pinch recording's fingers closing
     ("circle", 1.1, None),              # pinch held while drawing a circle: save
     ("unpinching", None, None),
-    ("open", 0.8, None),
+    ("open", 0.3, None),                # and the hand leaves
 ]
 CIRCLE_RADIUS = 0.06  # m
 

@@ -86,7 +86,7 @@ def plot_taught_path(path: str, tool_path: List[tuple], program: Program, part_s
     top.set_xlabel("x (mm, base frame)")
     top.set_ylabel("y (mm)")
     top.set_title("top view")
-    top.axis("equal")
+    top.set_aspect("equal", adjustable="box")
     top.legend(fontsize=8, loc="best")
     height.set_xlabel("time while teaching (s)")
     height.set_ylabel("tool z (mm)")
