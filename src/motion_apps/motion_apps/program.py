@@ -22,12 +22,12 @@ leaves either the old or the new program, never a truncated or mixed one.
 """
 import math
 import os
-import tempfile
 from dataclasses import dataclass, field
 from typing import List
 
 import yaml
 
+from motion_common.atomic_file import write_atomic
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema
 
@@ -188,24 +188,4 @@ def save_program(program: Program, path: str) -> str:
     text = program.to_yaml()
     path = os.path.abspath(path)
     parse_program(yaml.load(text, Loader=_Loader), path)  # never write what load_program would refuse
-    folder = os.path.dirname(path)
-    os.makedirs(folder, exist_ok=True)
-    fd, temp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as stream:
-            stream.write(text)
-            stream.flush()
-            os.fsync(stream.fileno())
-        os.replace(temp, path)
-    except BaseException:
-        try:
-            os.unlink(temp)
-        except OSError:
-            pass
-        raise
-    dir_fd = os.open(folder, os.O_RDONLY)
-    try:
-        os.fsync(dir_fd)
-    finally:
-        os.close(dir_fd)
-    return path
+    return write_atomic(path, text)

@@ -33,7 +33,7 @@ from pybullet_utils import bullet_client
 from hw_interface.sim_driver import entry_is_fixed, load_scene
 from motion_common.errors import ParameterError, RobotModelError
 from motion_common.kinematics import RobotKinematics, pose_to_se3, slerp
-from motion_common.params import Param, ParamSchema
+from motion_common.params import Param, ParamSchema, read_yaml_file
 
 CHECK_SCHEMA = ParamSchema([
     Param("fence_min", [-1.0, -1.0, 0.01], "m", "workspace fence, lower corner of the tool position", length=3),
@@ -67,21 +67,12 @@ def check_params(values: Optional[dict], source: str) -> dict:
 
 def load_check_params(path: str) -> dict:
     """Read and check a program_check.yaml."""
-    try:
-        with open(path, encoding="utf-8") as stream:
-            values = yaml.safe_load(stream)
-    except (OSError, yaml.YAMLError) as exc:
-        raise ParameterError(f"{path}: cannot read: {exc}") from None
-    return check_params(values, path)
+    return check_params(read_yaml_file(path), path)
 
 
 def load_scene_file(path: str) -> list:
     """The body list of a scene YAML (hw_interface/config/scenes/*.yaml: a ``scene:`` key)."""
-    try:
-        with open(path, encoding="utf-8") as stream:
-            data = yaml.safe_load(stream)
-    except (OSError, yaml.YAMLError) as exc:
-        raise ParameterError(f"{path}: cannot read the scene: {exc}") from None
+    data = read_yaml_file(path)
     spec = data.get("scene") if isinstance(data, dict) else data
     if not isinstance(spec, list) or not all(isinstance(entry, dict) for entry in spec):
         raise ParameterError(f"{path}: a scene file holds 'scene:' with a list of bodies (see "

@@ -26,10 +26,8 @@ import time
 from dataclasses import dataclass
 from typing import Callable, Dict, List, Optional
 
-import yaml
-
 from motion_common.errors import ParameterError
-from motion_common.params import Param, ParamSchema
+from motion_common.params import Param, ParamSchema, read_yaml_file
 
 from .program import Program, ProgramError, Waypoint, save_program
 
@@ -64,14 +62,7 @@ def check_gesture_config(values: Optional[dict], source: str) -> dict:
 
 def load_gesture_config(path: str) -> dict:
     """Read and check a gesture_commands.yaml; ParameterError names the file."""
-    try:
-        with open(path, encoding="utf-8") as stream:
-            values = yaml.safe_load(stream)
-    except OSError as exc:
-        raise ParameterError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        raise ParameterError(f"{path}: not valid YAML: {exc}") from None
-    return check_gesture_config(values, path)
+    return check_gesture_config(read_yaml_file(path), path)
 
 
 @dataclass

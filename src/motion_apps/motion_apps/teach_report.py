@@ -10,6 +10,8 @@ from typing import List, Optional
 
 import numpy as np
 
+from motion_common.atomic_file import write_atomic
+
 from .program import Program
 
 
@@ -29,15 +31,7 @@ def placement_error(program: Program, part_position) -> Optional[float]:
 
 def write_summary(path: str, summary: dict) -> str:
     """Write ``summary`` as JSON atomically (temp file, fsync, rename); return the path."""
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-    temporary = f"{path}.tmp"
-    with open(temporary, "w", encoding="utf-8") as stream:
-        json.dump(summary, stream, indent=2)
-        stream.write("\n")
-        stream.flush()
-        os.fsync(stream.fileno())
-    os.replace(temporary, path)
-    return path
+    return write_atomic(path, json.dumps(summary, indent=2) + "\n")
 
 
 def format_summary(summary: dict) -> str:

@@ -180,3 +180,16 @@ class ParamSchema:
     def merged(self, other: "ParamSchema") -> "ParamSchema":
         """A schema with this one's parameters and ``other``'s."""
         return ParamSchema(list(self.params.values()) + list(other.params.values()), self.ignore | other.ignore)
+
+
+def read_yaml_file(path: str):
+    """The content of a YAML parameter file; ParameterError naming the file if it cannot be
+    read or parsed (a node then stops with that message)."""
+    import yaml  # here, not at the top: the validator itself needs no YAML
+    try:
+        with open(path, encoding="utf-8") as stream:
+            return yaml.safe_load(stream)
+    except OSError as exc:
+        raise ParameterError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    except yaml.YAMLError as exc:
+        raise ParameterError(f"{path}: not valid YAML: {exc}") from None

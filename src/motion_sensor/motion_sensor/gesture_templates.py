@@ -25,11 +25,12 @@ The subject is the first folder under ``<dir>``, the label the file stem (a trai
 """
 import os
 import re
-import tempfile
 from dataclasses import dataclass, field
 from typing import List, Optional, Tuple
 
 import numpy as np
+
+from motion_common.atomic_file import write_atomic
 
 from .errors import MotionSensorError
 
@@ -88,31 +89,6 @@ def format_path(points, times, comment: str = "") -> str:
     lines.append("# x y z [mm] t [ms]")
     lines.extend(f"{x:.3f} {y:.3f} {z:.3f} {t:.3f}" for (x, y, z), t in zip(points, times))
     return "\n".join(lines) + "\n"
-
-
-def write_atomic(path: str, text: str) -> None:
-    """Write ``text`` to ``path`` atomically: temp file in the same folder, fsync, rename."""
-    folder = os.path.dirname(os.path.abspath(path))
-    os.makedirs(folder, exist_ok=True)
-    fd, temp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(temp, path)
-    except BaseException:
-        if os.path.exists(temp):
-            os.unlink(temp)
-        raise
-    try:
-        dir_fd = os.open(folder, os.O_RDONLY)
-    except OSError:  # pragma: no cover - platforms without directory fds
-        return
-    try:
-        os.fsync(dir_fd)
-    finally:
-        os.close(dir_fd)
 
 
 def check_label(label: str) -> str:
