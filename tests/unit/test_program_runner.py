@@ -104,7 +104,7 @@ def test_a_stop_mid_program_ends_the_run_at_that_waypoint(checker, result):
     assert [c for c in controller.calls if c == ("set_gripper", False)] == []  # the part is not dropped
     assert f"4/6 place_above MoveL (speed 0.50) ... {result.name}" in lines[-3]
     assert "stopped at waypoint 4/6 'place_above' (index 3)" == lines[-2]
-    assert f"3/6 waypoints done" in lines[-1] and f"result {result.name}" in lines[-1]
+    assert "3/6 waypoints done" in lines[-1] and f"result {result.name}" in lines[-1]
 
 
 def test_a_latched_stop_before_the_start_refuses_the_first_move(checker):

@@ -27,7 +27,6 @@ from typing import List, Optional
 
 import numpy as np
 import pybullet
-import yaml
 from pybullet_utils import bullet_client
 
 from hw_interface.sim_driver import entry_is_fixed, load_scene
