@@ -35,6 +35,11 @@ def test_gesture_eval_end_to_end(tmp_path):
         fh.write("1 2 oops 4\n")
     with open(os.path.join(test, "s5", "junk.csv"), "w") as fh:
         fh.write("nothing here\n")
+    header_file = os.path.join(test, "s5", "session1", "O.csv")  # a header row and comments are fine
+    with open(header_file) as fh:
+        body = fh.read()
+    with open(header_file, "w") as fh:
+        fh.write("# recorded by a Leap, mm / ms\nx y z t\n" + body)
     plot = str(tmp_path / "confusion.png")
     proc = subprocess.run([PYTHON, os.path.join(NODES, "gesture_eval"), "--train", train, "--test", test,
                            "--json", "--plot", plot, "--reject"], capture_output=True, text=True, timeout=120,

@@ -13,7 +13,8 @@ squared-Euclidean inner distance, Sakoe-Chiba ``window``) in a cascade:
    stops as soon as a lower bound exceeds it. The result equals a full scan.
 
 Distances are reported per point (``dtw / sqrt(length)``). Closed-set mode (the default)
-always answers the nearest class (k-NN vote when ``k`` > 1, ties to the nearest). Open
+always answers the nearest class (distance-weighted k-NN vote when ``k`` > 1: the nearest
+template counts 1, the i-th d_1/d_i; ties to the nearest). Open
 set (``reject_distance`` set, or ``calibrate_rejection``) answers ``None`` when the
 nearest template is farther than the threshold, so non-gesture motion is not forced into
 a class.
@@ -36,7 +37,7 @@ from motion_common.params import Param, ParamSchema
 from .gesture_features import FEATURE_PARAMS, FeatureConfig, features
 
 CLASSIFIER_PARAMS = ParamSchema([
-    Param("window", 0.15, "fraction of length", "Sakoe-Chiba band half-width", low=0.0, high=1.0),
+    Param("window", 0.25, "fraction of length", "Sakoe-Chiba band half-width", low=0.0, high=1.0),
     Param("k", 1, "templates", "nearest neighbours voting (1 = 1-NN)", low=1, high=15),
     Param("reject_distance", None, "per-point DTW distance", "open-set threshold; None = closed set",
           kind=float, low=0.0, nullable=True),
@@ -63,7 +64,7 @@ class Classification:
 class DTWClassifier:
     """k-NN DTW classifier over labelled trajectory templates (see the module docstring)."""
 
-    def __init__(self, config: FeatureConfig = FeatureConfig(), window: float = 0.15, k: int = 1,
+    def __init__(self, config: FeatureConfig = FeatureConfig(), window: float = 0.25, k: int = 1,
                  reject_distance: Optional[float] = None):
         self.config = config
         self.window_fraction = window
@@ -205,11 +206,12 @@ class DTWClassifier:
         """Classify a feature array (see ``classify``)."""
         scale = np.sqrt(self.config.length)
         best, per_class, calls = self.scan(query, self.k)
-        if self.k > 1:
+        if self.k > 1:  # distance-weighted vote: the nearest counts 1, the others d_1 / d_i
             votes: Dict[str, float] = {}
-            for rank, (_, index) in enumerate(best):
+            nearest = max(best[0][0], 1e-12)
+            for dist, index in best:
                 label = self.labels[index]
-                votes[label] = votes.get(label, 0.0) + 1.0 / (1.0 + rank)
+                votes[label] = votes.get(label, 0.0) + nearest / max(dist, 1e-12)
             winner = max(votes, key=lambda label: (votes[label], -per_class[label]))
         else:
             winner = self.labels[best[0][1]]
