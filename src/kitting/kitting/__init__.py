@@ -1,0 +1,1 @@
+"""Vision-fed kitting cell: plain-Python foundations (no rospy). See the package README."""

@@ -1,0 +1,222 @@
+"""Builds the kitting cell in a pybullet client and moves parts along the belt.
+
+Bodies: the belt (a dark box whose top is the belt plane), the kitting tray (a base plate
+and six shallow slot pads), the marker plate (a quad textured with the ArUco marker that
+``cv2.aruco.generateImageMarker`` draws, with a white quiet zone) and the parts (flat-shaded
+meshes of ``kitting.meshes`` in their class colour). Parts are kinematic: mass 0, moved by
+``step(dt)`` (reset per step at the belt speed), so a render process can mirror the same
+poses with ``set_part_poses``. The robot is not built here (the driver loads it).
+"""
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import cv2
+import numpy as np
+import pybullet as p
+
+from .cell import Cell
+from .meshes import part_mesh
+from .parts import part_class
+
+BELT_RGBA = (0.16, 0.16, 0.18, 1.0)
+TRAY_RGBA = (0.25, 0.35, 0.55, 1.0)
+FLOOR_RGBA = (0.45, 0.45, 0.42, 1.0)
+QUIET_ZONE_CELLS = 1   # white border around the marker, in marker cells
+
+
+def marker_image(dictionary: str, marker_id: int, pixels_per_cell: int = 20) -> Tuple[np.ndarray, float]:
+    """(grey image of the marker with a white quiet zone, ratio of the whole image's side to
+    the black square's side)."""
+    aruco_dict = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
+    cells = aruco_dict.markerSize + 2          # data bits + the black border
+    side = cells * pixels_per_cell
+    image = cv2.aruco.generateImageMarker(aruco_dict, marker_id, side, borderBits=1)
+    pad = QUIET_ZONE_CELLS * pixels_per_cell
+    image = cv2.copyMakeBorder(image, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=255)
+    return image, (cells + 2 * QUIET_ZONE_CELLS) / cells
+
+
+def load_texture(client: int, image: np.ndarray) -> int:
+    """A pybullet texture id for an image (grey or BGR), via a temporary PNG."""
+    handle, path = tempfile.mkstemp(suffix=".png", prefix="kitting_tex_")
+    os.close(handle)
+    try:
+        cv2.imwrite(path, image)
+        return p.loadTexture(path, physicsClientId=client)
+    finally:
+        os.remove(path)
+
+
+def textured_quad(client: int, image: np.ndarray, size: Tuple[float, float], pose: np.ndarray,
+                  cells: int = 24) -> int:
+    """A static body: a quad of ``size`` (x, y in its frame, m) at the 4x4 ``pose``, showing
+    ``image`` upright (image top towards the quad's +y, image right towards +x), facing +z.
+
+    The quad is split into ``cells`` x ``cells`` squares: TinyRenderer interpolates texture
+    coordinates affinely in screen space (no perspective correction), which on one big
+    quad moves the printed corners by about a pixel; on small cells the error vanishes."""
+    sx, sy = size
+    steps = np.linspace(0.0, 1.0, cells + 1)
+    vertices, uvs, indices = [], [], []
+    for v in steps:
+        for u in steps:
+            vertices.append(((u - 0.5) * sx, (v - 0.5) * sy, 0.0))
+            uvs.append((u, v))
+    row = cells + 1
+    for j in range(cells):
+        for i in range(cells):
+            a = j * row + i
+            indices += [a, a + 1, a + row + 1, a, a + row + 1, a + row]
+    visual = p.createVisualShape(p.GEOM_MESH, vertices=vertices, indices=indices, uvs=uvs,
+                                 normals=[(0, 0, 1)] * len(vertices), rgbaColor=[1, 1, 1, 1],
+                                 physicsClientId=client)
+    body = p.createMultiBody(0.0, -1, visual, basePosition=pose[:3, 3].tolist(),
+                             baseOrientation=quaternion_from_matrix(pose[:3, :3]), physicsClientId=client)
+    p.changeVisualShape(body, -1, textureUniqueId=load_texture(client, image), rgbaColor=[1, 1, 1, 1],
+                        physicsClientId=client)
+    return body
+
+
+def quaternion_from_matrix(rotation) -> List[float]:
+    """[x, y, z, w] of a 3x3 rotation matrix."""
+    from scipy.spatial.transform import Rotation
+    return Rotation.from_matrix(np.asarray(rotation, float)).as_quat().tolist()
+
+
+def _box(client, half_extents, position, rgba, yaw=0.0, collide=True) -> int:
+    visual = p.createVisualShape(p.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=client)
+    collision = p.createCollisionShape(p.GEOM_BOX, halfExtents=half_extents, physicsClientId=client) if collide else -1
+    return p.createMultiBody(0.0, collision, visual, basePosition=list(position),
+                             baseOrientation=p.getQuaternionFromEuler([0, 0, yaw]), physicsClientId=client)
+
+
+@dataclass
+class PartState:
+    """A part in the scene: its id, class and pose on the belt (x, y: m; yaw: rad; z = belt)."""
+
+    part_id: int
+    class_name: str
+    x: float
+    y: float
+    yaw: float
+    on_belt: bool = True
+
+
+class SimScene:
+    """The cell's static bodies in ``client`` plus the parts, moved by the belt."""
+
+    def __init__(self, client: int, cell: Cell, floor: bool = True):
+        self.client, self.cell = client, cell
+        self.parts: Dict[int, PartState] = {}
+        self._bodies: Dict[int, int] = {}
+        self._shapes: Dict[str, int] = {}
+        self._next_id = 1
+        self.static_bodies: Dict[str, int] = {}
+        self._build(floor)
+
+    # -- static cell --------------------------------------------------------------------
+    def _build(self, floor: bool):
+        cell, c = self.cell, self.client
+        belt = cell.belt
+        if floor:
+            self.static_bodies["floor"] = _box(c, [2.0, 2.0, 0.005], [0, 0, belt.height - 0.35], FLOOR_RGBA)
+        length = belt.x_end - belt.x_start
+        self.static_bodies["belt"] = _box(
+            c, [length / 2, belt.width / 2, belt.thickness / 2],
+            [(belt.x_start + belt.x_end) / 2, belt.y, belt.height - belt.thickness / 2], BELT_RGBA)
+        tray = cell.tray
+        tx, ty = tray.size
+        self.static_bodies["tray"] = _box(c, [tx / 2 + 0.01, ty / 2 + 0.01, 0.005],
+                                          tray.position - [0, 0, 0.005], TRAY_RGBA, tray.yaw)
+        for slot in tray.slots:
+            rgba = list(part_class(slot.part_class).rgba[:3]) + [1.0]
+            rgba = [0.5 * v + 0.1 for v in rgba[:3]] + [1.0]
+            self.static_bodies[f"slot_{slot.part_class}"] = _box(
+                c, [slot.size[0] / 2 - 0.004, slot.size[1] / 2 - 0.004, 0.001], slot.center + [0, 0, 0.001],
+                rgba, slot.yaw, collide=False)
+        for marker in cell.markers:
+            image, ratio = marker_image(marker.dictionary, marker.id)
+            side = marker.size * ratio
+            self.static_bodies[f"marker_plate_{marker.id}"] = _box(
+                c, [side / 2 + 0.01, side / 2 + 0.01, 0.02], marker.pose[:3, 3] - [0, 0, 0.0205],
+                (0.3, 0.3, 0.3, 1), collide=True)
+            self.static_bodies[f"marker_{marker.id}"] = textured_quad(c, image, (side, side), marker.pose)
+
+    # -- parts --------------------------------------------------------------------------
+    def _shape(self, class_name: str) -> int:
+        if class_name not in self._shapes:
+            part = part_class(class_name)
+            vertices, indices, normals = part_mesh(part).arrays()
+            self._shapes[class_name] = p.createVisualShape(
+                p.GEOM_MESH, vertices=vertices, indices=indices, normals=normals,
+                rgbaColor=list(part.rgba), physicsClientId=self.client)
+        return self._shapes[class_name]
+
+    def add_part(self, class_name: str, x: float, y: float, yaw: float = 0.0,
+                 part_id: Optional[int] = None) -> int:
+        """A part of ``class_name`` lying on the belt plane at (x, y, yaw); returns its id."""
+        part = part_class(class_name)
+        if part_id is None:
+            part_id = self._next_id
+        self._next_id = max(self._next_id, part_id + 1)
+        collision = p.createCollisionShape(p.GEOM_BOX, halfExtents=[part.length / 2, part.width / 2, part.height / 2],
+                                           physicsClientId=self.client)
+        body = p.createMultiBody(0.0, collision, self._shape(class_name), physicsClientId=self.client)
+        self._bodies[part_id] = body
+        self.parts[part_id] = PartState(part_id, class_name, x, y, yaw)
+        self._place(part_id)
+        return part_id
+
+    def add_foreign_object(self, half_extents=(0.02, 0.015, 0.01), x=0.0, y=None, yaw=0.0,
+                           rgba=(0.8, 0.1, 0.1, 1.0)) -> int:
+        """An object of no known class (a box) on the belt: returns its body id."""
+        y = self.cell.belt.y if y is None else y
+        return _box(self.client, list(half_extents), [x, y, self.cell.belt.height + half_extents[2]],
+                    rgba, yaw, collide=False)
+
+    def remove_part(self, part_id: int):
+        body = self._bodies.pop(part_id, None)
+        self.parts.pop(part_id, None)
+        if body is not None:
+            p.removeBody(body, physicsClientId=self.client)
+
+    def _place(self, part_id: int):
+        state = self.parts[part_id]
+        p.resetBasePositionAndOrientation(
+            self._bodies[part_id], [state.x, state.y, self.cell.belt.height],
+            p.getQuaternionFromEuler([0, 0, state.yaw]), physicsClientId=self.client)
+
+    def body_of(self, part_id: int) -> int:
+        return self._bodies[part_id]
+
+    def step(self, dt: float):
+        """Move every part still on the belt by speed * dt along +x; a part past the belt's
+        end leaves the belt (stays where it fell off: it is no longer moved)."""
+        belt = self.cell.belt
+        for part_id, state in self.parts.items():
+            if not state.on_belt:
+                continue
+            state.x += belt.speed * dt
+            if state.x > belt.x_end:
+                state.on_belt = False
+            self._place(part_id)
+
+    def part_poses(self) -> List[Tuple[int, str, float, float, float]]:
+        """(id, class, x, y, yaw) of every part: what a render process mirrors."""
+        return [(s.part_id, s.class_name, s.x, s.y, s.yaw) for s in self.parts.values()]
+
+    def set_part_poses(self, poses: Sequence[Tuple[int, str, float, float, float]]):
+        """Mirror another scene's parts: add, move and remove so that exactly ``poses`` exist."""
+        wanted = {int(pid): (name, x, y, yaw) for pid, name, x, y, yaw in poses}
+        for part_id in [pid for pid in self.parts if pid not in wanted or self.parts[pid].class_name != wanted[pid][0]]:
+            self.remove_part(part_id)
+        for part_id, (name, x, y, yaw) in wanted.items():
+            if part_id in self.parts:
+                state = self.parts[part_id]
+                state.x, state.y, state.yaw = x, y, yaw
+                self._place(part_id)
+            else:
+                self.add_part(name, x, y, yaw, part_id=part_id)

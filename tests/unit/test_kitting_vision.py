@@ -1,0 +1,166 @@
+"""Kitting cell foundations: cell YAML, camera model vs rendering, calibration (ChArUco
+intrinsics, marker extrinsics), detector and pixel-to-belt geometry on rendered images."""
+import math
+
+import numpy as np
+import pybullet as p
+import pytest
+from scipy.spatial.transform import Rotation
+
+from kitting.calibration import BoardSpec, calibrate_intrinsics, extrinsics_from_marker, pose_error
+from kitting.camera import PinholeCamera, render
+from kitting.cell import load_cell, cell_from_dict, transform
+from kitting.detector import ClassicalDetector
+from kitting.geometry import pixel_to_belt, pixels_to_plane
+from kitting.parts import CLASS_NAMES, PART_CLASSES
+from kitting.sim_scene import SimScene, textured_quad
+from kitting.vision import BeltVision
+from motion_common.errors import ParameterError
+
+
+@pytest.fixture(scope="module")
+def cell():
+    return load_cell()
+
+
+@pytest.fixture(scope="module")
+def client():
+    cid = p.connect(p.DIRECT)
+    yield cid
+    p.disconnect(cid)
+
+
+@pytest.fixture
+def scene(client, cell):
+    p.resetSimulation(physicsClientId=client)
+    return SimScene(client, cell)
+
+
+def test_six_classes_with_plausible_sizes():
+    assert len(CLASS_NAMES) == 6
+    for part in PART_CLASSES.values():
+        assert part.thread in ("M8", "M10", "M12")
+        assert 0.008 <= part.width <= 0.05 and part.height > 0
+
+
+def test_cell_yaml_loads_with_units_and_rejects_unknown_keys(cell):
+    assert cell.belt.speed == pytest.approx(0.05)
+    assert len(cell.tray.slots) == 6 and {s.part_class for s in cell.tray.slots} == set(CLASS_NAMES)
+    assert cell.camera.width == 640 and cell.camera.height == 480
+    with pytest.raises(ParameterError, match="unknown parameter 'sped'"):
+        cell_from_dict({"belt": {"sped": 0.1}}, "x.yaml")
+    with pytest.raises(ParameterError):
+        cell_from_dict({"belt": {"speed": -1.0}}, "x.yaml")
+
+
+def test_rendered_pixels_match_K(client, cell, scene):
+    """A dark belt edge and the marker corners land where cv2.projectPoints puts them."""
+    camera = PinholeCamera.from_spec(cell.camera)
+    image = render(client, camera, supersample=2)
+    result = extrinsics_from_marker(image, cell.markers, camera.K, camera.distortion)
+    assert result.ok and result.reprojection_px < 0.5
+
+
+def test_scene_moves_parts_along_the_belt(scene, cell):
+    part = scene.add_part("nut_silver", -0.3, cell.belt.y)
+    scene.step(2.0)
+    assert scene.parts[part].x == pytest.approx(-0.3 + 2.0 * cell.belt.speed)
+    body_x = p.getBasePositionAndOrientation(scene.body_of(part), physicsClientId=scene.client)[0][0]
+    assert body_x == pytest.approx(scene.parts[part].x)
+
+
+def test_charuco_intrinsics_within_one_percent(client):
+    p.resetSimulation(physicsClientId=client)
+    spec = BoardSpec()
+    image, size = spec.image()
+    body = textured_quad(client, image, size, np.eye(4))
+    K = np.array([[600.0, 0, 319.5], [0, 600.0, 239.5], [0, 0, 1]])
+    camera = PinholeCamera(640, 480, K)
+    rng = np.random.default_rng(7)
+    images = []
+    for _ in range(10):
+        rotation = Rotation.from_euler("xyz", rng.uniform([-30, -30, -20], [30, 30, 20]), degrees=True)
+        rotation = rotation * Rotation.from_euler("x", 180, degrees=True)   # face the camera
+        position = rng.uniform([-0.05, -0.04, 0.45], [0.05, 0.04, 0.6])
+        p.resetBasePositionAndOrientation(body, position.tolist(), rotation.as_quat().tolist(),
+                                          physicsClientId=client)
+        images.append(render(client, camera))
+    result = calibrate_intrinsics(images, spec)
+    print(f"ChArUco: fx {result.fx:.2f} fy {result.fy:.2f} (true 600) rms {result.rms:.3f} px, "
+          f"{result.views_used} views")
+    assert abs(result.fx / 600.0 - 1) < 0.01 and abs(result.fy / 600.0 - 1) < 0.01
+    assert result.rms < 1.0
+
+
+def test_marker_extrinsics_recover_the_camera_pose(client, cell, scene):
+    camera = PinholeCamera.from_spec(cell.camera)
+    image = render(client, camera, supersample=2)
+    result = extrinsics_from_marker(image, cell.markers, camera.K, camera.distortion)
+    position_error, angle_error = pose_error(result.T_base_cam, camera.pose)
+    print(f"marker extrinsics: {1000 * position_error:.2f} mm, {angle_error:.3f} deg, "
+          f"reprojection {result.reprojection_px:.3f} px")
+    assert result.ok and result.used == [7, 8]
+    assert position_error < 0.003 and angle_error < 0.3
+    estimated = camera.with_pose(result.T_base_cam)
+    points = np.c_[np.random.default_rng(1).uniform(-0.55, -0.05, 30), np.random.default_rng(2).uniform(0.6, 0.8, 30),
+                   np.full(30, cell.belt.height)]
+    errors = np.linalg.norm(pixels_to_plane(estimated, camera.project(points), cell.belt.height) - points, axis=1)
+    assert np.percentile(errors, 95) < 0.002
+
+
+def test_missing_marker_is_refused(cell):
+    camera = PinholeCamera.from_spec(cell.camera)
+    blank = np.full((480, 640, 3), 90, np.uint8)
+    result = extrinsics_from_marker(blank, cell.markers, camera.K, camera.distortion)
+    assert not result.ok and "no marker" in result.reason
+
+
+def test_ray_plane_is_exact_for_a_tilted_camera(cell):
+    camera = PinholeCamera.from_spec(cell.camera)
+    tilt = math.degrees(math.acos(-camera.pose[2, 2]))
+    assert tilt > 5  # the cell's camera is tilted: a straight-down model would be wrong
+    points = np.array([[-0.5, 0.62, cell.belt.height], [-0.1, 0.8, cell.belt.height], [-0.3, 0.7, cell.belt.height]])
+    for point, pixel in zip(points, camera.project(points)):
+        assert np.allclose(pixel_to_belt(camera, pixel, cell.belt.height), point, atol=1e-9)
+
+
+def _vision(cell, width=320, height=240):
+    camera = PinholeCamera.from_spec(cell.camera).scaled(width, height)
+    return camera, BeltVision(camera, cell.belt)
+
+
+def test_detector_classifies_each_class_and_locates_it(client, cell, scene):
+    camera, vision = _vision(cell, 640, 480)
+    rng = np.random.default_rng(3)
+    truth = {}
+    for i, name in enumerate(CLASS_NAMES):
+        x, y = -0.52 + 0.085 * i, cell.belt.y + rng.uniform(-0.06, 0.06)
+        truth[scene.add_part(name, x, y, rng.uniform(-math.pi, math.pi))] = (name, x, y)
+    observations, result = vision.observe(render(client, camera))
+    assert result.rejections == []
+    assert sorted(o.class_name for o in observations) == sorted(CLASS_NAMES)
+    for obs in observations:
+        name, x, y = min(truth.values(), key=lambda t: math.hypot(t[1] - obs.x, t[2] - obs.y))
+        assert obs.class_name == name
+        assert math.hypot(x - obs.x, y - obs.y) < 0.003
+        assert 0.3 < obs.confidence <= 1.0
+
+
+def test_detector_rejects_corrupt_images():
+    detector = ClassicalDetector()
+    for bad in (None, np.zeros((0, 0, 3), np.uint8), np.zeros((240, 320), np.float32),
+                np.zeros((240, 320, 3), np.uint8)):
+        result = detector.detect(bad)
+        assert result.corrupt and not result.detections
+
+
+def test_detector_rejects_edge_parts_and_unknown_objects(client, cell, scene):
+    camera, vision = _vision(cell)
+    scene.add_part("nut_yellow", -0.35, cell.belt.y + cell.belt.width / 2)        # on the belt edge
+    scene.add_foreign_object(x=-0.2, y=cell.belt.y)                                # red box
+    scene.add_foreign_object(half_extents=(0.025, 0.025, 0.005), x=-0.45, y=cell.belt.y,
+                             rgba=(0.78, 0.78, 0.8, 1))                             # silver plate
+    observations, result = vision.observe(render(client, camera))
+    assert observations == []
+    reasons = sorted(r.reason for r in result.rejections)
+    assert reasons == ["edge", "unknown object", "unknown object"]
