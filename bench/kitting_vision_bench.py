@@ -1,0 +1,180 @@
+#!/usr/bin/env python3
+"""Kitting vision benchmark: rendering, detection, classification and belt-plane pose error
+over seeded random part placements.
+
+    bench/run kitting_vision_bench [--images N] [--seed S] [--parts-per-image K]
+
+Per image, K parts of random classes are placed at random, separated positions and yaws
+on the belt in the camera's view; the cell's camera renders it at 640x480 (TinyRenderer,
+in process); the classical detector finds and classifies them; each detection is matched
+to the nearest true part. The camera pose used for pixel->belt is the one calibrated from
+the cell's ArUco markers (one supersampled image), as the vision node will do; the pose
+error with the true camera is reported alongside. Also: ChArUco intrinsics on rendered
+board views, and the render round trip through the separate render process.
+Writes bench/results/kitting_vision_bench.json.
+"""
+import argparse
+import math
+import os
+import sys
+import time
+
+import numpy as np
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+for package in ("motion_common", "kitting"):
+    sys.path.insert(0, os.path.join(ROOT, "src", package))
+sys.path.insert(0, os.path.join(ROOT, "bench"))
+
+import pybullet as p  # noqa: E402
+from scipy.spatial.transform import Rotation  # noqa: E402
+
+from bench_common import write_results  # noqa: E402
+from kitting.calibration import BoardSpec, calibrate_intrinsics, extrinsics_from_marker, pose_error  # noqa: E402
+from kitting.camera import PinholeCamera, render  # noqa: E402
+from kitting.cell import load_cell  # noqa: E402
+from kitting.parts import CLASS_NAMES  # noqa: E402
+from kitting.render_worker import RenderWorker  # noqa: E402
+from kitting.sim_scene import SimScene, textured_quad  # noqa: E402
+from kitting.vision import BeltVision  # noqa: E402
+
+
+def pct(values, q):
+    return round(float(np.percentile(values, q)), 3) if len(values) else None
+
+
+def placements(rng, cell, count, view):
+    """``count`` positions on the belt inside the camera's view, at least 6 cm apart."""
+    belt = cell.belt
+    chosen = []
+    while len(chosen) < count:
+        x = rng.uniform(*view)
+        y = rng.uniform(belt.y - belt.width / 2 + 0.03, belt.y + belt.width / 2 - 0.03)
+        if all(math.hypot(x - a, y - b) > 0.06 for a, b in chosen):
+            chosen.append((x, y))
+    return chosen
+
+
+def charuco(client):
+    p.resetSimulation(physicsClientId=client)
+    spec = BoardSpec()
+    image, size = spec.image()
+    body = textured_quad(client, image, size, np.eye(4))
+    K = np.array([[600.0, 0, 319.5], [0, 600.0, 239.5], [0, 0, 1]])
+    camera = PinholeCamera(640, 480, K)
+    rng = np.random.default_rng(7)
+    images = []
+    for _ in range(15):
+        rotation = Rotation.from_euler("xyz", rng.uniform([-30, -30, -20], [30, 30, 20]), degrees=True)
+        rotation = rotation * Rotation.from_euler("x", 180, degrees=True)
+        position = rng.uniform([-0.05, -0.04, 0.45], [0.05, 0.04, 0.6])
+        p.resetBasePositionAndOrientation(body, position.tolist(), rotation.as_quat().tolist(), physicsClientId=client)
+        images.append(render(client, camera))
+    result = calibrate_intrinsics(images, spec)
+    return {"views": result.views_used, "fx": round(result.fx, 3), "fy": round(result.fy, 3), "true_f": 600.0,
+            "focal_error_pct": round(100 * max(abs(result.fx / 600 - 1), abs(result.fy / 600 - 1)), 3),
+            "cx": round(float(result.K[0, 2]), 3), "cy": round(float(result.K[1, 2]), 3),
+            "reprojection_rms_px": round(result.rms, 4)}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--images", type=int, default=120)
+    parser.add_argument("--parts-per-image", type=int, default=3)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--worker-frames", type=int, default=20)
+    args = parser.parse_args()
+
+    cell = load_cell()
+    client = p.connect(p.DIRECT)
+    intrinsics = charuco(client)
+    p.resetSimulation(physicsClientId=client)
+    scene = SimScene(client, cell)
+    true_camera = PinholeCamera.from_spec(cell.camera)
+    calibration = extrinsics_from_marker(render(client, true_camera, supersample=2), cell.markers,
+                                         true_camera.K, true_camera.distortion)
+    if not calibration.ok:
+        sys.exit(f"marker calibration failed: {calibration.reason}")
+    position_error, angle_error = pose_error(calibration.T_base_cam, true_camera.pose)
+    camera = true_camera.with_pose(calibration.T_base_cam)
+    vision = BeltVision(camera, cell.belt)
+    vision_true = BeltVision(true_camera, cell.belt)
+
+    rng = np.random.default_rng(args.seed)
+    view = (true_camera.pose[0, 3] - 0.24, true_camera.pose[0, 3] + 0.24)
+    render_ms, detect_ms, errors, errors_true = [], [], [], []
+    per_class = {name: {"placed": 0, "detected": 0, "correct": 0, "errors_mm": []} for name in CLASS_NAMES}
+    confusion = {name: {} for name in CLASS_NAMES}
+    rejections = {}
+    for _ in range(args.images):
+        for part_id in list(scene.parts):
+            scene.remove_part(part_id)
+        truth = []
+        for x, y in placements(rng, cell, args.parts_per_image, view):
+            name = CLASS_NAMES[int(rng.integers(len(CLASS_NAMES)))]
+            scene.add_part(name, x, y, rng.uniform(-math.pi, math.pi))
+            truth.append((name, x, y))
+            per_class[name]["placed"] += 1
+        start = time.perf_counter()
+        image = render(client, true_camera)
+        render_ms.append(1000 * (time.perf_counter() - start))
+        start = time.perf_counter()
+        observations, result = vision.observe(image)
+        detect_ms.append(1000 * (time.perf_counter() - start))
+        observations_true, _ = vision_true.observe(image)
+        for rejection in result.rejections:
+            rejections[rejection.reason] = rejections.get(rejection.reason, 0) + 1
+        for obs, obs_true in zip(observations, observations_true):
+            name, x, y = min(truth, key=lambda t: math.hypot(t[1] - obs.x, t[2] - obs.y))
+            error = 1000 * math.hypot(x - obs.x, y - obs.y)
+            if error > 15:
+                continue  # not this part
+            stats = per_class[name]
+            stats["detected"] += 1
+            stats["correct"] += obs.class_name == name
+            confusion[name][obs.class_name] = confusion[name].get(obs.class_name, 0) + 1
+            stats["errors_mm"].append(error)
+            errors.append(error)
+            errors_true.append(1000 * math.hypot(x - obs_true.x, y - obs_true.y))
+
+    worker_ms = []
+    with RenderWorker() as worker:
+        poses = scene.part_poses()
+        for k in range(args.worker_frames):
+            start = time.perf_counter()
+            worker.render(float(k), poses)
+            worker_ms.append(1000 * (time.perf_counter() - start))
+
+    classes = {}
+    for name, stats in per_class.items():
+        classes[name] = {"placed": stats["placed"], "detected": stats["detected"],
+                         "accuracy": round(stats["correct"] / stats["placed"], 4) if stats["placed"] else None,
+                         "pose_error_mm_p50": pct(stats["errors_mm"], 50),
+                         "pose_error_mm_p95": pct(stats["errors_mm"], 95)}
+    placed = sum(s["placed"] for s in per_class.values())
+    results = {
+        "images": args.images, "parts_per_image": args.parts_per_image, "seed": args.seed,
+        "image_size": [true_camera.width, true_camera.height],
+        "render_ms_p50": pct(render_ms, 50), "render_ms_p99": pct(render_ms, 99),
+        "render_worker_roundtrip_ms_p50": pct(worker_ms, 50), "render_worker_roundtrip_ms_p99": pct(worker_ms, 99),
+        "detector_ms_p50": pct(detect_ms, 50), "detector_ms_p99": pct(detect_ms, 99),
+        "classification_accuracy": round(sum(s["correct"] for s in per_class.values()) / placed, 4),
+        "detection_rate": round(sum(s["detected"] for s in per_class.values()) / placed, 4),
+        "pose_error_mm_p50": pct(errors, 50), "pose_error_mm_p95": pct(errors, 95),
+        "pose_error_mm_max": pct(errors, 100),
+        "pose_error_true_camera_mm_p50": pct(errors_true, 50), "pose_error_true_camera_mm_p95": pct(errors_true, 95),
+        "marker_extrinsics": {"markers": calibration.used, "position_error_mm": round(1000 * position_error, 3),
+                              "rotation_error_deg": round(angle_error, 4),
+                              "reprojection_px": round(calibration.reprojection_px, 4)},
+        "charuco_intrinsics": intrinsics,
+        "rejections": rejections, "per_class": classes, "confusion": confusion,
+    }
+    write_results("kitting_vision_bench", results)
+    print(f"\n{'class':15s} {'placed':>6s} {'det':>5s} {'acc':>6s} {'p50 mm':>7s} {'p95 mm':>7s}")
+    for name, row in classes.items():
+        print(f"{name:15s} {row['placed']:6d} {row['detected']:5d} {row['accuracy']!s:>6s} "
+              f"{row['pose_error_mm_p50']!s:>7s} {row['pose_error_mm_p95']!s:>7s}")
+
+
+if __name__ == "__main__":
+    main()
