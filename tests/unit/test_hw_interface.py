@@ -211,3 +211,42 @@ def test_sim_scene_reset_puts_part_arm_and_gripper_back():
         np.testing.assert_allclose(driver.get_robot_joints(), HOME, atol=1e-3)
     finally:
         driver.disconnect()
+
+
+def test_a_move_that_started_late_after_a_latch_never_answers_success():
+    """A MOVE_J past the latch check whose driver call only starts moving later (a
+    reconnect backoff, a busy machine) is stopped again and answered INTERRUPTED."""
+    import threading
+
+    class LateMover(LaggingServo):
+        def __init__(self):
+            super().__init__()
+            self.entered, self.proceed, self.stops = threading.Event(), threading.Event(), 0
+
+        def move_j(self, joints, timeout=30.0):
+            self.entered.set()
+            self.proceed.wait(5.0)   # the driver is still connecting when the latch comes
+            self.q = np.array(joints, float)
+
+        def stop(self):
+            self.stops += 1
+
+    robot = LateMover()
+    dispatcher = CommandDispatcher(robot, move_timeout=5.0)
+    answers = []
+    worker = threading.Thread(target=lambda: answers.append(dispatcher.handle(CommandIndex.MOVE_J, joints=[0.5] * 6)))
+    worker.start()
+    assert robot.entered.wait(5.0)
+    dispatcher.latch_stop("test")
+    robot.proceed.set()
+    worker.join(5.0)
+    assert answers[0].result == Result.INTERRUPTED, answers[0].reason
+    assert robot.stops >= 2, "stopped at the latch and again when the late move returned"
+
+
+def test_a_latch_is_released_only_by_the_channel_that_set_it():
+    dispatcher = CommandDispatcher(LaggingServo())
+    dispatcher.latch_stop("latch_stop service")
+    assert "NOT released" in dispatcher.release_stop("/motion_commander/estop") and dispatcher.latched
+    assert "released by latch_stop service" in dispatcher.release_stop("latch_stop service")
+    assert not dispatcher.latched

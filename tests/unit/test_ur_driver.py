@@ -300,3 +300,17 @@ def test_ur_rtde_fake_driver_starts_at_the_start_pose_and_checks_its_parameters(
     schema = driver_parameters("ur_rtde_fake")
     assert "initial_joints" in schema.params and "initial_joints" not in driver_parameters("ur_rtde").params
     assert schema.params["joint_stop_deceleration"].unit == "rad/s^2"
+
+
+def test_a_stop_then_a_new_target_never_leaves_two_servoj_loops(fake):
+    import threading
+    driver = make(fake, stream_timeout=5.0)
+    driver.login()
+    for _ in range(20):  # stop and restart at once, many times: the old loop may be mid-period
+        driver.set_joints(HOME + 0.01)
+        driver.stop()
+        driver.set_joints(HOME + 0.01)
+    loops = lambda: [t for t in threading.enumerate() if t.name == "ur-servoj" and t.is_alive()]  # noqa: E731
+    assert wait_for(lambda: len(loops()) == 1), f"{len(loops())} servoJ loops alive"
+    driver.stop()
+    assert wait_for(lambda: not loops())

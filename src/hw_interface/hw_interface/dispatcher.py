@@ -119,11 +119,17 @@ class CommandDispatcher:
                 else f"stop latched by {source}: robot stopped, motion refused until released")
 
     def release_stop(self, source: str = "latch_stop") -> str:
-        """Release the latched stop; motion commands are accepted again."""
+        """Release the latched stop; motion commands are accepted again.
+
+        Only the channel that latched it may release it: a button that keeps publishing
+        False on the e-stop topic must not lift a stop an operator latched by service."""
         with self._gate:
             was, by = self._latched, self._latch_source
+            if was and by != source:
+                return (f"stop NOT released: it was latched by {by}, release it there "
+                        f"(a release from {source} cannot lift it)")
             self._latched, self._latch_source = False, ""
-        return f"stop released by {source} (was latched by {by})" if was else "no stop was latched"
+        return f"stop released by {source}" if was else "no stop was latched"
 
     def _stop(self, reason: str) -> None:
         """Stop the driver; while a motion command that passed the latch check is still
@@ -137,8 +143,10 @@ class CommandDispatcher:
         if in_flight:
             threading.Thread(target=self._restop, args=(epoch, reason), name="restop", daemon=True).start()
 
-    def _restop(self, epoch, reason, window=0.1, period=0.01):
-        deadline = time.monotonic() + window
+    def _restop(self, epoch, reason, period=0.01):
+        # Until every motion command that passed the latch check has returned (a move may
+        # start late: a reconnect backoff, a busy machine), bounded by the move timeout.
+        deadline = time.monotonic() + self.move_timeout
         while time.monotonic() < deadline:
             time.sleep(period)
             with self._gate:
@@ -168,12 +176,19 @@ class CommandDispatcher:
                             f"{command.name} refused: a latched stop is active (set by {self._latch_source}); "
                             + RELEASE_HINT))
                     self._in_flight += 1
+                    epoch = self._stop_epoch
             try:
                 robots = self._execute(command, position, orientation, joints, url)
             finally:
                 if motion:
                     with self._gate:
                         self._in_flight -= 1
+                        stopped_meanwhile = self._stop_epoch != epoch
+            if motion and stopped_meanwhile:
+                # A STOP or latch came while this command was under way: whatever the
+                # driver said, it did not complete as asked. Stop again, never SUCCESS.
+                stop_driver(self.driver, "a STOP during the command")
+                raise HwInterfaceError(f"{command.name} interrupted by a STOP while it ran", Result.INTERRUPTED)
             return self._answer(Result.SUCCESS, "", robots)
         except HwInterfaceError as exc:
             reason = str(exc)
@@ -194,6 +209,8 @@ class CommandDispatcher:
             if len(joints) != 1 or joints[0] not in (0.0, 1.0):
                 return Result.WRONG_LENGTH, "SET_GRIPPER needs joints = [1] to grip or [0] to release"
         if command == CommandIndex.SET_DIGITAL_OUTPUT:
+            if len(joints) == 2 and not np.all(np.isfinite(np.asarray(joints, dtype=float))):
+                return Result.NOT_FINITE, "SET_DIGITAL_OUTPUT: joints contains NaN or inf"
             if len(joints) != 2 or joints[1] not in (0.0, 1.0) or joints[0] != int(joints[0]) or joints[0] < 0:
                 return Result.WRONG_LENGTH, "SET_DIGITAL_OUTPUT needs joints = [output number, 0 or 1]"
         return None

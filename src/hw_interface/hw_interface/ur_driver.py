@@ -151,6 +151,10 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         self._target_time = 0.0
         self._stream_thread: Optional[threading.Thread] = None
         self._streaming = threading.Event()
+        # Each stream thread serves one generation: a stop followed at once by a new
+        # target starts a new generation, and the old thread (perhaps still waiting out its
+        # period outside the lock) sees the change and exits: never two servoJ loops.
+        self._stream_generation = 0
         self._fault = ""
         self._gripper_on = False
         self._active_move = None          # "moveJ" / "moveL" while an asynchronous move runs
@@ -287,7 +291,9 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
             self._target_time = time.monotonic()
             if not self._streaming.is_set():
                 self._streaming.set()
-                self._stream_thread = threading.Thread(target=self._stream_loop, name="ur-servoj", daemon=True)
+                self._stream_generation += 1
+                self._stream_thread = threading.Thread(target=self._stream_loop, args=(self._stream_generation,),
+                                                       name="ur-servoj", daemon=True)
                 self._stream_thread.start()
 
     def move_j(self, joints, timeout: float = 30.0, asynchronous: bool = False) -> None:
@@ -432,14 +438,15 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         except Exception as exc:
             self._fault = f"servoStop failed: {exc}"
 
-    def _stream_loop(self):
-        """servoJ the latest target once per controller period until told to stop."""
+    def _stream_loop(self, generation):
+        """servoJ the latest target once per controller period until told to stop (or a
+        newer stream generation took over)."""
         control = self._control
         try:
-            while self._streaming.is_set():
+            while self._streaming.is_set() and generation == self._stream_generation:
                 start = control.initPeriod()
                 with self._lock:
-                    if not self._streaming.is_set():
+                    if not self._streaming.is_set() or generation != self._stream_generation:
                         break
                     if time.monotonic() - self._target_time > self.stream_timeout:
                         # Targets stopped coming (stale teleop): halt rather than hold a servo.
@@ -457,6 +464,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                 control.waitPeriod(start)
         except Exception as exc:  # disconnect mid-stream: stop streaming, report, recover on the next command
             with self._lock:
-                self._fault = f"streaming stopped: {exc}"
-                self._streaming.clear()
-                self._target = None
+                if generation == self._stream_generation:
+                    self._fault = f"streaming stopped: {exc}"
+                    self._streaming.clear()
+                    self._target = None
