@@ -337,3 +337,10 @@ def test_a_fist_is_not_a_pinch_clutch():
     spotter = GestureSpotter(classifier, {"mode": "clutch"})
     assert [e.name for f in frames for e in spotter.update(f)] == []
     assert any(s.reason == "a fist, not a pinch" for s in spotter.segments)
+
+
+def test_inverted_hysteresis_thresholds_are_refused_at_start_up():
+    with pytest.raises(ParameterError, match="grab_off.*grab_on"):
+        StaticPoseDetector({"grab_on": 0.5, "grab_off": 0.8}, "teach_gestures.yaml")
+    with pytest.raises(ParameterError, match="clutch_off"):
+        GestureSpotter(None, {"clutch_on": 0.5, "clutch_off": 0.7}, "teach_gestures.yaml")

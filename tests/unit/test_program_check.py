@@ -134,3 +134,24 @@ def test_check_parameters_are_validated():
     with pytest.raises(ParameterError, match="fence_min .* must be below fence_max"):
         check_params({"fence_min": [0, 0, 0], "fence_max": [1, 1, 0]}, "c.yaml")
     assert load_check_params(CONFIG)["collision_margin"] == 0.005
+
+
+def test_the_arm_through_the_teach_table_is_a_collision_even_at_the_zero_pose():
+    """Moving links are always checked: at the URDF's zero pose the stretched UR5e passes
+    through the teach cell's table, and the check must say so (only the base's own
+    contacts, e.g. standing on the floor, are ignored)."""
+    scene = load_scene_file(os.path.join(ROOT, "src", "motion_apps", "config", "teach_scene.yaml"))
+    checker = ProgramChecker(UR5E, "ur5e", scene=scene)
+    try:
+        kin = RobotKinematics(UR5E)
+        position, orientation = kin.forward_pose(np.zeros(6))
+        program = Program(robot="ur5e", waypoints=[Waypoint("stretched", list(position), list(orientation),
+                                                            [0.0] * 6, "none", 0.5)])
+        report = checker.check(program)
+        assert not report.ok and "table" in report.text(), report.text()
+        home_position, home_orientation = kin.forward_pose(HOME)
+        fine = Program(robot="ur5e", waypoints=[Waypoint("home", list(home_position), list(home_orientation),
+                                                         list(HOME), "none", 0.5)])
+        assert checker.check(fine).ok, checker.check(fine).text()
+    finally:
+        checker.close()

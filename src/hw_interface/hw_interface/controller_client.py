@@ -38,13 +38,18 @@ class MotionControllerClient:
         request.header.frame_id = frame_id
         if stamp is not None:
             request.header.stamp = stamp
-        with self._lock:
-            try:
-                response = self._proxy(request)
-            except (rospy.ServiceException, rospy.ROSException):
-                # A persistent connection dies with the server; one fresh try is enough.
-                self._proxy = rospy.ServiceProxy(self.service, commander, persistent=True)
-                response = self._proxy(request)
+        if command_index == CommandIndex.STOP:
+            # STOP must never wait behind this client's own blocking MOVE_J/MOVE_L on the
+            # persistent connection: it goes on a connection of its own, at once.
+            response = rospy.ServiceProxy(self.service, commander)(request)
+        else:
+            with self._lock:
+                try:
+                    response = self._proxy(request)
+                except (rospy.ServiceException, rospy.ROSException):
+                    # A persistent connection dies with the server; one fresh try is enough.
+                    self._proxy = rospy.ServiceProxy(self.service, commander, persistent=True)
+                    response = self._proxy(request)
         if check and response.result != Result.SUCCESS:
             raise HwInterfaceError(f"{CommandIndex(command_index).name if command_index in set(CommandIndex) else command_index} "
                                    f"refused: {Result(response.result).name}: {response.header.frame_id}",

@@ -130,18 +130,20 @@ class ProgramChecker:
         self._client = client
         self._robot = client.loadURDF(self.urdf_path, useFixedBase=True)
         by_name, self._link_names = {}, {-1: "base"}
+        # Links that cannot move (the base, and links fixed to it before the first joint):
+        # their contacts (the base standing on the floor or a table) never count. Every
+        # moving link is checked, whatever it touches at any particular pose.
+        self._static_links = {-1}
         for index in range(client.getNumJoints(self._robot)):
             info = client.getJointInfo(self._robot, index)
             by_name[info[1].decode()] = index
             self._link_names[index] = info[12].decode()
+            if info[2] == pybullet.JOINT_FIXED and info[16] in self._static_links:
+                self._static_links.add(index)
         self._joint_indices = [by_name[name] for name in kinematics.joint_names]
         static = [entry for entry in self.scene_spec
                   if entry_is_fixed(self.scene_spec, entry.get("name", f"body{self.scene_spec.index(entry)}"))]
         self._bodies = load_scene(client, static)
-        # Pairs touching at the zero pose (the base standing on the floor) never count.
-        self._ignored = set()
-        for link, body in self._contacts(np.zeros(len(self._joint_indices))):
-            self._ignored.add((link, body))
 
     def _contacts(self, joints):
         client = self._client
@@ -158,7 +160,7 @@ class ProgramChecker:
 
     def _collisions(self, joints):
         return [(self._link_names.get(link, str(link)), body) for link, body in self._contacts(joints)
-                if (link, body) not in self._ignored]
+                if link not in self._static_links]
 
     def close(self):
         """Disconnect the pybullet client."""

@@ -5,6 +5,18 @@ import os
 import tempfile
 
 
+def _current_umask() -> int:
+    """The process umask, read without changing it (os.umask would race other threads)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except OSError:
+        pass
+    return 0o022
+
+
 def write_atomic(path: str, text: str) -> str:
     """Write ``text`` to ``path`` atomically; return the absolute path.
 
@@ -18,6 +30,8 @@ def write_atomic(path: str, text: str) -> str:
     os.makedirs(folder, exist_ok=True)
     fd, temp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp", dir=folder)
     try:
+        # mkstemp makes the file owner-only; a saved program or template is a normal file.
+        os.fchmod(fd, 0o666 & ~_current_umask())
         with os.fdopen(fd, "w", encoding="utf-8") as stream:
             stream.write(text)
             stream.flush()

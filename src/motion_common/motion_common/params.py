@@ -193,3 +193,13 @@ def read_yaml_file(path: str):
         raise ParameterError(f"{path}: cannot read: {exc.strerror or exc}") from None
     except yaml.YAMLError as exc:
         raise ParameterError(f"{path}: not valid YAML: {exc}") from None
+
+
+def check_ordered(values: dict, pairs, source: str) -> None:
+    """Hysteresis and other cross-checks: for each (lower key, upper key) the first value
+    must not exceed the second; ParameterError naming both keys and the file otherwise
+    (inverted thresholds make a state chatter on and off every frame)."""
+    for low, high in pairs:
+        if values[low] > values[high]:
+            raise ParameterError(f"{source}: parameter '{low}' ({values[low]!r}) must not exceed '{high}' "
+                                 f"({values[high]!r})")

@@ -1,8 +1,8 @@
-"""The one ROS node wrapper of every hand device (the only module outside nodes/ that
-imports rospy). A device executable is three lines:
+"""The one ROS node wrapper of every hand device (a ROS edge: it imports rospy, the
+device classes do not). A device executable is three lines:
 
     from motion_sensor.device_node import run_device_node
-    from motion_sensor.devices.leap import LeapDevice
+    from motion_sensor.leap_client import LeapDevice
     run_device_node(LeapDevice, "leap_driver")
 
 It reads the node's private parameters through the device's ParamSchema merged with

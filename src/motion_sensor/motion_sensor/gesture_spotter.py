@@ -30,10 +30,12 @@ from typing import Deque, List, Optional
 
 import numpy as np
 
-from motion_common.params import Param, ParamSchema
+from motion_common.params import Param, ParamSchema, check_ordered
 
 from .dtw_classifier import Classification, DTWClassifier
 from .gesture_frame import GestureEvent, GestureFrame
+
+MAX_KEPT_SEGMENTS = 200  # the newest segments kept for inspection; a node runs for hours
 
 SPOTTER_PARAMS = ParamSchema([
     Param("mode", "speed", "", "segmentation: speed/pause or a held clutch pose", choices=("speed", "clutch")),
@@ -77,9 +79,11 @@ class GestureSpotter:
     def __init__(self, classifier: Optional[DTWClassifier] = None, params: Optional[dict] = None,
                  source: str = "gesture_spotter"):
         self.params = SPOTTER_PARAMS.validate(params or {}, source)
+        check_ordered(self.params, [("clutch_off", "clutch_on"), ("stop_speed", "start_speed")], source)
         self.classifier = classifier
         self.last_segment: Optional[Segment] = None
-        self.segments: List[Segment] = []
+        # The latest segments (bounded: a node runs for hours), for record_gesture and tests.
+        self.segments: Deque[Segment] = deque(maxlen=MAX_KEPT_SEGMENTS)
         self.speed = float("nan")
         self._reset_state()
 

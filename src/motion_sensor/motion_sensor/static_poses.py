@@ -35,7 +35,7 @@ from typing import Deque, List, Optional, Tuple
 
 import numpy as np
 
-from motion_common.params import Param, ParamSchema
+from motion_common.params import Param, ParamSchema, check_ordered
 
 from .gesture_frame import GestureEvent, GestureFrame
 
@@ -104,6 +104,8 @@ class StaticPoseDetector:
 
     def __init__(self, params: Optional[dict] = None, source: str = "static_poses"):
         p = STATIC_PARAMS.validate(params or {}, source)
+        check_ordered(p, [("grab_off", "grab_on"), ("pinch_off", "pinch_on"), ("open_on", "open_off"),
+                          ("still_speed", "still_release_speed")], source)
         self.params = p
         self._poses = {name: _Pose(name, p[key]) for name, key in (
             ("fist", "fist_dwell_s"), ("pinch", "pinch_dwell_s"), ("open_palm", "open_dwell_s"),
