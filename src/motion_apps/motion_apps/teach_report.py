@@ -63,11 +63,15 @@ def plot_taught_path(path: str, tool_path: List[tuple], program: Program, part_s
     if len(samples):
         top.plot(samples[:, 1] * 1000, samples[:, 2] * 1000, color="0.6", lw=1, label="tool while teaching")
         height.plot(samples[:, 0] - samples[0, 0], samples[:, 3] * 1000, color="0.6", lw=1, label="tool z")
+    labels = {}  # waypoints stacked above each other (above, at, grip) share one label
     for index, waypoint in enumerate(program.waypoints):
         marker, color = {"grip": ("v", "tab:red"), "release": ("^", "tab:green")}.get(waypoint.action, ("o", "tab:blue"))
         top.scatter(waypoint.position[0] * 1000, waypoint.position[1] * 1000, marker=marker, color=color, zorder=3)
-        top.annotate(str(index), (waypoint.position[0] * 1000, waypoint.position[1] * 1000),
-                     textcoords="offset points", xytext=(4, 4), fontsize=8)
+        key = tuple(np.round(np.asarray(waypoint.position[:2]) * 1000 / 5))  # 5 mm cells
+        labels.setdefault(key, (waypoint.position, []))[1].append(str(index))
+    for position, indices in labels.values():
+        top.annotate(",".join(indices), (position[0] * 1000, position[1] * 1000), textcoords="offset points",
+                     xytext=(6, 4), fontsize=8)
     if len(waypoints):
         top.plot(waypoints[:, 0] * 1000, waypoints[:, 1] * 1000, color="tab:blue", lw=1.5, alpha=0.6,
                  label="program (waypoints: o move, v grip, ^ release)")
@@ -80,8 +84,17 @@ def plot_taught_path(path: str, tool_path: List[tuple], program: Program, part_s
     top.set_xlabel("x (mm, base frame)")
     top.set_ylabel("y (mm)")
     top.set_title("top view")
+    # A square window around everything drawn: true proportions, and room for the labels.
+    drawn = [samples[:, 1:3]] if len(samples) else []
+    drawn += [waypoints[:, :2]] if len(waypoints) else []
+    drawn += [np.asarray(p, dtype=float)[None, :2] for p in (part_start, part_end) if p is not None]
+    if drawn:
+        xy = np.vstack(drawn) * 1000
+        centre, half = (xy.max(axis=0) + xy.min(axis=0)) / 2, np.ptp(xy, axis=0).max() / 2 + 40
+        top.set_xlim(centre[0] - half, centre[0] + half)
+        top.set_ylim(centre[1] - half, centre[1] + half)
     top.set_aspect("equal", adjustable="box")
-    top.legend(fontsize=8, loc="best")
+    top.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
     height.set_xlabel("time while teaching (s)")
     height.set_ylabel("tool z (mm)")
     height.set_title("height")
