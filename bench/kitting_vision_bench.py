@@ -27,7 +27,6 @@ for package in ("motion_common", "kitting"):
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 
 import pybullet as p  # noqa: E402
-from scipy.spatial.transform import Rotation  # noqa: E402
 
 from bench_common import write_results  # noqa: E402
 from kitting.calibration import BoardSpec, calibrate_intrinsics, extrinsics_from_marker, pose_error  # noqa: E402
@@ -35,7 +34,7 @@ from kitting.camera import PinholeCamera, render  # noqa: E402
 from kitting.cell import load_cell  # noqa: E402
 from kitting.parts import CLASS_NAMES  # noqa: E402
 from kitting.render_worker import RenderWorker  # noqa: E402
-from kitting.sim_scene import SimScene, textured_quad  # noqa: E402
+from kitting.sim_scene import SimScene, render_board_views  # noqa: E402
 from kitting.vision import BeltVision  # noqa: E402
 
 
@@ -56,20 +55,9 @@ def placements(rng, cell, count, view):
 
 
 def charuco(client):
-    p.resetSimulation(physicsClientId=client)
     spec = BoardSpec()
-    image, size = spec.image()
-    body = textured_quad(client, image, size, np.eye(4))
-    K = np.array([[600.0, 0, 319.5], [0, 600.0, 239.5], [0, 0, 1]])
-    camera = PinholeCamera(640, 480, K)
-    rng = np.random.default_rng(7)
-    images = []
-    for _ in range(15):
-        rotation = Rotation.from_euler("xyz", rng.uniform([-30, -30, -20], [30, 30, 20]), degrees=True)
-        rotation = rotation * Rotation.from_euler("x", 180, degrees=True)
-        position = rng.uniform([-0.05, -0.04, 0.45], [0.05, 0.04, 0.6])
-        p.resetBasePositionAndOrientation(body, position.tolist(), rotation.as_quat().tolist(), physicsClientId=client)
-        images.append(render(client, camera))
+    camera = PinholeCamera(640, 480, np.array([[600.0, 0, 319.5], [0, 600.0, 239.5], [0, 0, 1]]))
+    images = render_board_views(client, spec, camera, 15)
     result = calibrate_intrinsics(images, spec)
     return {"views": result.views_used, "fx": round(result.fx, 3), "fy": round(result.fy, 3), "true_f": 600.0,
             "focal_error_pct": round(100 * max(abs(result.fx / 600 - 1), abs(result.fy / 600 - 1)), 3),

@@ -5,15 +5,14 @@ import math
 import numpy as np
 import pybullet as p
 import pytest
-from scipy.spatial.transform import Rotation
 
 from kitting.calibration import BoardSpec, calibrate_intrinsics, extrinsics_from_marker, pose_error
 from kitting.camera import PinholeCamera, render
-from kitting.cell import load_cell, cell_from_dict, transform
+from kitting.cell import load_cell, cell_from_dict
 from kitting.detector import ClassicalDetector
 from kitting.geometry import pixel_to_belt, pixels_to_plane
 from kitting.parts import CLASS_NAMES, PART_CLASSES
-from kitting.sim_scene import SimScene, textured_quad
+from kitting.sim_scene import SimScene, render_board_views
 from kitting.vision import BeltVision
 from motion_common.errors import ParameterError
 
@@ -70,21 +69,9 @@ def test_scene_moves_parts_along_the_belt(scene, cell):
 
 
 def test_charuco_intrinsics_within_one_percent(client):
-    p.resetSimulation(physicsClientId=client)
     spec = BoardSpec()
-    image, size = spec.image()
-    body = textured_quad(client, image, size, np.eye(4))
-    K = np.array([[600.0, 0, 319.5], [0, 600.0, 239.5], [0, 0, 1]])
-    camera = PinholeCamera(640, 480, K)
-    rng = np.random.default_rng(7)
-    images = []
-    for _ in range(10):
-        rotation = Rotation.from_euler("xyz", rng.uniform([-30, -30, -20], [30, 30, 20]), degrees=True)
-        rotation = rotation * Rotation.from_euler("x", 180, degrees=True)   # face the camera
-        position = rng.uniform([-0.05, -0.04, 0.45], [0.05, 0.04, 0.6])
-        p.resetBasePositionAndOrientation(body, position.tolist(), rotation.as_quat().tolist(),
-                                          physicsClientId=client)
-        images.append(render(client, camera))
+    camera = PinholeCamera(640, 480, np.array([[600.0, 0, 319.5], [0, 600.0, 239.5], [0, 0, 1]]))
+    images = render_board_views(client, spec, camera, 10)
     result = calibrate_intrinsics(images, spec)
     print(f"ChArUco: fx {result.fx:.2f} fy {result.fy:.2f} (true 600) rms {result.rms:.3f} px, "
           f"{result.views_used} views")

@@ -8,9 +8,8 @@ from typing import Optional
 import numpy as np
 import pybullet
 from pybullet_utils import bullet_client
-from scipy.spatial.transform import Rotation, Slerp
 
-from motion_common.kinematics import RobotKinematics, pose_to_se3
+from motion_common.kinematics import RobotKinematics
 from motion_common.params import Param, ParamSchema
 
 from .errors import HwInterfaceError
@@ -237,26 +236,12 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._run_path(JointPath([start, goal], duration), timeout)
 
     def move_l(self, position, orientation, timeout: float = 30.0) -> None:
-        start = self._current_command()
-        start_pos, start_quat = self.kinematics.forward_pose(start)
-        goal_pos = np.asarray(position, dtype=float)
-        rotations = Rotation.from_quat([start_quat, np.asarray(orientation, dtype=float)])
-        distance = float(np.linalg.norm(goal_pos - start_pos))
-        angle = float((rotations[0].inv() * rotations[1]).magnitude())
-        # One waypoint per 5 mm / 2 degrees keeps the joint-space chords close to the line.
-        count = int(max(2, np.ceil(distance / 0.005), np.ceil(angle / np.radians(2.0)))) + 1
-        fractions = np.linspace(0.0, 1.0, count)
-        slerp = Slerp([0.0, 1.0], rotations)
-        waypoints, seed = [start], start
-        for fraction, rotation in zip(fractions[1:], slerp(fractions[1:])):
-            point = start_pos + fraction * (goal_pos - start_pos)
-            result = self.kinematics.solve_ik(pose_to_se3(point, rotation.as_quat()), seed)
-            if not result.success:
-                raise HwInterfaceError(f"MoveL target unreachable at {fraction:.0%} of the line "
-                                       f"(IK error {result.position_error * 1000:.1f} mm)", Result.UNREACHABLE)
-            waypoints.append(result.joints)
-            seed = result.joints
-        waypoints = np.array(waypoints)
+        line = self.kinematics.line_path(self._current_command(), position, orientation)
+        if not line.reachable:
+            raise HwInterfaceError(f"MoveL target unreachable at {line.failed_at:.0%} of the line "
+                                   f"(IK error {line.ik_error * 1000:.1f} mm)", Result.UNREACHABLE)
+        waypoints, distance = line.joints, line.distance
+        count = len(waypoints)
         steps = np.abs(np.diff(waypoints, axis=0)).max(axis=0) * (count - 1)
         duration = max(joint_move_duration(np.zeros_like(steps), steps,
                                            self.kinematics.velocity_limits * self.speed_scale,

@@ -7,7 +7,6 @@ meshes of ``kitting.meshes`` in their class colour). Parts are kinematic: mass 0
 ``step(dt)`` (reset per step at the belt speed), so a render process can mirror the same
 poses with ``set_part_poses``. The robot is not built here (the driver loads it).
 """
-import math
 import os
 import tempfile
 from dataclasses import dataclass
@@ -220,3 +219,24 @@ class SimScene:
                 self._place(part_id)
             else:
                 self.add_part(name, x, y, yaw, part_id=part_id)
+
+
+def render_board_views(client, spec, camera, count: int, seed: int = 7) -> List[np.ndarray]:
+    """``count`` simulated ChArUco calibration shots: the board of ``spec`` (a
+    kitting.calibration.BoardSpec) as a textured quad, seen by ``camera`` from seeded random
+    poses (tilted up to 30° about x/y, 20° about z, 0.45-0.6 m away, facing the camera).
+    Resets the client's simulation first."""
+    from scipy.spatial.transform import Rotation
+    from .camera import render
+    p.resetSimulation(physicsClientId=client)
+    image, size = spec.image()
+    body = textured_quad(client, image, size, np.eye(4))
+    rng = np.random.default_rng(seed)
+    images = []
+    for _ in range(count):
+        rotation = Rotation.from_euler("xyz", rng.uniform([-30, -30, -20], [30, 30, 20]), degrees=True)
+        rotation = rotation * Rotation.from_euler("x", 180, degrees=True)   # face the camera
+        position = rng.uniform([-0.05, -0.04, 0.45], [0.05, 0.04, 0.6])
+        p.resetBasePositionAndOrientation(body, position.tolist(), rotation.as_quat().tolist(), physicsClientId=client)
+        images.append(render(client, camera))
+    return images

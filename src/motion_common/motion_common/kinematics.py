@@ -2,6 +2,7 @@
 damped-least-squares inverse kinematics warm-started from the current joints."""
 import os
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 import pinocchio as pin
@@ -37,6 +38,24 @@ def slerp(q0, q1, fraction: float) -> np.ndarray:
     a = pin.Quaternion(np.asarray(q0, dtype=float))
     b = pin.Quaternion(np.asarray(q1, dtype=float))
     return np.array(a.slerp(float(fraction), b).coeffs())
+
+
+@dataclass
+class LinePath:
+    """Joint waypoints along a straight tool line (MoveL): ``joints`` (n x dof, the start
+    first), the line's ``distance`` (m) and turn ``angle`` (rad). When IK fails part-way,
+    ``failed_at`` is the path fraction and ``ik_error`` the residual (m)."""
+
+    joints: np.ndarray
+    distance: float
+    angle: float
+    failed_at: Optional[float] = None
+    ik_error: float = 0.0
+
+    @property
+    def reachable(self) -> bool:
+        """True when every point of the line was solved."""
+        return self.failed_at is None
 
 
 @dataclass
@@ -124,3 +143,26 @@ class RobotKinematics:
             step = jac.T @ np.linalg.solve(jac @ jac.T + damping * np.eye(6), error)
             q = np.clip(pin.integrate(self.model, q, step), self.lower, self.upper)
         return IkResult(q, False, float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:])), max_iterations)
+
+    def line_path(self, start_joints, goal_position, goal_orientation, max_step: float = 0.005,
+                  max_angle_step: float = np.radians(2.0)) -> LinePath:
+        """Joint waypoints of a straight tool line from ``start_joints`` to the goal pose,
+        orientation slerped: one IK solve (warm-started from the previous one) per
+        ``max_step`` m / ``max_angle_step`` rad, so the joint-space chords stay close to the
+        line. Stops at the first unreachable point (``failed_at``)."""
+        start = np.asarray(start_joints, dtype=float)
+        start_pos, start_quat = self.forward_pose(start)
+        goal_pos = np.asarray(goal_position, dtype=float)
+        goal_quat = np.asarray(goal_orientation, dtype=float)
+        distance = float(np.linalg.norm(goal_pos - start_pos))
+        angle = float(2.0 * np.arccos(min(1.0, abs(float(np.dot(start_quat, goal_quat / np.linalg.norm(goal_quat)))))))
+        count = int(max(2, np.ceil(distance / max_step), np.ceil(angle / max_angle_step))) + 1
+        waypoints, seed = [start], start
+        for fraction in np.linspace(0.0, 1.0, count)[1:]:
+            target = pose_to_se3(start_pos + fraction * (goal_pos - start_pos), slerp(start_quat, goal_quat, fraction))
+            result = self.solve_ik(target, seed)
+            if not result.success:
+                return LinePath(np.array(waypoints), distance, angle, float(fraction), result.position_error)
+            waypoints.append(result.joints)
+            seed = result.joints
+        return LinePath(np.array(waypoints), distance, angle)

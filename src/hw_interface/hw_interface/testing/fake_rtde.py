@@ -25,9 +25,9 @@ import threading
 import time
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
+from scipy.spatial.transform import Rotation
 
-from motion_common.kinematics import RobotKinematics, pose_to_se3
+from motion_common.kinematics import RobotKinematics
 
 from motion_common.params import Param, ParamSchema
 
@@ -313,24 +313,10 @@ class _FakeControl(_FakeInterface):
     def moveL(self, pose, speed=0.25, acceleration=1.2, asynchronous=False):
         self.fake.record("moveL", list(pose), speed, acceleration, asynchronous)
         fake = self.fake
-        start = fake.q.copy()
-        start_pos, start_quat = fake.kinematics.forward_pose(start)
-        goal_pos = np.asarray(pose[:3], dtype=float)
-        rotations = Rotation.from_quat([start_quat, Rotation.from_rotvec(pose[3:6]).as_quat()])
-        distance = float(np.linalg.norm(goal_pos - start_pos))
-        angle = float((rotations[0].inv() * rotations[1]).magnitude())
-        count = int(max(2, np.ceil(distance / 0.005), np.ceil(angle / np.radians(2.0)))) + 1
-        fractions = np.linspace(0.0, 1.0, count)
-        slerp = Slerp([0.0, 1.0], rotations)
-        waypoints, seed = [start], start
-        for fraction, rotation in zip(fractions[1:], slerp(fractions[1:])):
-            result = fake.kinematics.solve_ik(pose_to_se3(start_pos + fraction * (goal_pos - start_pos),
-                                                          rotation.as_quat()), seed)
-            if not result.success:
-                return False  # the controller refuses an unreachable line
-            waypoints.append(result.joints)
-            seed = result.joints
-        waypoints = np.array(waypoints)
+        line = fake.kinematics.line_path(fake.q.copy(), pose[:3], Rotation.from_rotvec(pose[3:6]).as_quat())
+        if not line.reachable:
+            return False  # the controller refuses an unreachable line
+        waypoints, distance, angle, count = line.joints, line.distance, line.angle, len(line.joints)
         # Path length in metres; a pure rotation counts 0.1 m per radian.
         length = max(distance, 0.1 * angle)
 
