@@ -57,12 +57,22 @@ CAMERA_SCHEMA = ParamSchema([
     Param("near", 0.05, "m", "near clip plane", low=0.001, high=10.0, low_open=True),
     Param("far", 2.0, "m", "far clip plane", low=0.01, high=100.0),
 ])
+GRIPPER_SCHEMA = ParamSchema([
+    Param("tcp_length", 0.05, "m", "magnet face below the flange (tool0), along the tool z axis",
+          low=0.0, high=0.5),
+    Param("grip_radius", 0.012, "m", "largest horizontal offset of a part's centre from the magnet axis "
+          "that still grips", low=0.001, high=0.1),
+    Param("grip_gap", 0.006, "m", "largest gap between the magnet face and a part's top that still grips",
+          low=0.0, high=0.05),
+    Param("output", 0, "", "controller digital output that switches the magnet", low=0, high=63),
+])
 CELL_SCHEMA = ParamSchema([
     Param("robot", "ur10e", "", "robot model", choices=("ur10e", "ur5e")),
     Param("belt", BELT_SCHEMA.defaults(), "", "conveyor belt", schema=BELT_SCHEMA),
     Param("tray", TRAY_SCHEMA.defaults(), "", "kitting tray", schema=TRAY_SCHEMA),
     Param("marker", MARKER_SCHEMA.defaults(), "", "ArUco marker", schema=MARKER_SCHEMA),
     Param("camera", CAMERA_SCHEMA.defaults(), "", "camera above the belt", schema=CAMERA_SCHEMA),
+    Param("gripper", GRIPPER_SCHEMA.defaults(), "", "electromagnetic gripper", schema=GRIPPER_SCHEMA),
 ])
 
 
@@ -177,12 +187,25 @@ class CameraSpec:
 
 
 @dataclass
+class Gripper:
+    """The electromagnet on the flange (the paper's gripper): face ``tcp_length`` below
+    tool0 along the tool z axis; grips a part whose top is within ``grip_gap`` of the face
+    and whose centre is within ``grip_radius`` of the magnet axis."""
+
+    tcp_length: float
+    grip_radius: float
+    grip_gap: float
+    output: int
+
+
+@dataclass
 class Cell:
     robot: str
     belt: Belt
     tray: Tray
     markers: List[Marker]
     camera: CameraSpec
+    gripper: Gripper = None
     source: str = "<defaults>"
 
     @property
@@ -225,7 +248,7 @@ def cell_from_dict(values: Optional[dict], source: str = "<dict>") -> Cell:
     K = np.array([[c["fx"], 0.0, c["cx"]], [0.0, c["fy"], c["cy"]], [0.0, 0.0, 1.0]])
     camera = CameraSpec(c["width"], c["height"], K, np.asarray(c["distortion"], float),
                         look_at_pose(c["position"], c["look_at"], c["image_right"]), c["near"], c["far"])
-    return Cell(values["robot"], belt, _tray(values["tray"]), markers, camera, source)
+    return Cell(values["robot"], belt, _tray(values["tray"]), markers, camera, Gripper(**values["gripper"]), source)
 
 
 def load_cell(path: str = DEFAULT_CELL) -> Cell:

@@ -28,10 +28,10 @@ def _serve(connection, cell_path, width, height, supersample):
         message = connection.recv()
         if message is None:
             break
-        stamp, poses, camera_pose = message
+        stamp, poses, camera_pose, lighting = message
         scene.set_part_poses(poses)
         view = camera if camera_pose is None else camera.with_pose(camera_pose)
-        connection.send(("image", stamp, render(client, view, supersample=supersample)))
+        connection.send(("image", stamp, render(client, view, lighting, supersample=supersample)))
     p.disconnect(client)
 
 
@@ -50,9 +50,12 @@ class RenderWorker:
             raise RuntimeError("render worker did not start")
         self._connection.recv()
 
-    def request(self, stamp: float, poses, camera_pose=None):
-        """Ask for an image (non-blocking); collect it with ``result``."""
-        self._connection.send((stamp, list(poses), None if camera_pose is None else np.asarray(camera_pose)))
+    def request(self, stamp: float, poses, camera_pose=None, lighting=None):
+        """Ask for an image (non-blocking) of the parts at ``poses`` seen from
+        ``camera_pose`` (4x4; None: the cell YAML's) under ``lighting`` (a
+        kitting.camera.Lighting; None: the default); collect it with ``result``."""
+        self._connection.send((stamp, list(poses), None if camera_pose is None else np.asarray(camera_pose),
+                               lighting))
 
     def result(self, timeout: float = 10.0):
         """(image, stamp) of the oldest request."""
@@ -61,8 +64,9 @@ class RenderWorker:
         _, stamp, image = self._connection.recv()
         return image, stamp
 
-    def render(self, stamp: float, poses, camera_pose=None, timeout: float = 10.0):
-        self.request(stamp, poses, camera_pose)
+    def render(self, stamp: float, poses, camera_pose=None, timeout: float = 10.0, lighting=None):
+        """Request and wait: (image, stamp)."""
+        self.request(stamp, poses, camera_pose, lighting)
         return self.result(timeout)
 
     def close(self):

@@ -23,7 +23,12 @@ from .parts import part_class
 BELT_RGBA = (0.16, 0.16, 0.18, 1.0)
 TRAY_RGBA = (0.25, 0.35, 0.55, 1.0)
 FLOOR_RGBA = (0.45, 0.45, 0.42, 1.0)
-QUIET_ZONE_CELLS = 1   # white border around the marker, in marker cells
+QUIET_ZONE_CELLS = 1
+# An object of no known class (the detector must reject it, the arm must never pick it):
+# a red plastic block, 40 x 30 x 20 mm.
+FOREIGN_CLASS = "foreign"
+FOREIGN_HALF_EXTENTS = (0.02, 0.015, 0.01)
+FOREIGN_RGBA = (0.8, 0.1, 0.1, 1.0)   # white border around the marker, in marker cells
 
 
 def marker_image(dictionary: str, marker_id: int, pixels_per_cell: int = 20) -> Tuple[np.ndarray, float]:
@@ -94,7 +99,8 @@ def _box(client, half_extents, position, rgba, yaw=0.0, collide=True) -> int:
 
 @dataclass
 class PartState:
-    """A part in the scene: its id, class and pose on the belt (x, y: m; yaw: rad; z = belt)."""
+    """A part in the scene: its id, class and pose on the belt (x, y: m; yaw: rad; z = belt),
+    or, off the belt (held, falling, in the tray), ``z`` (m) and ``orientation`` (x, y, z, w)."""
 
     part_id: int
     class_name: str
@@ -102,6 +108,8 @@ class PartState:
     y: float
     yaw: float
     on_belt: bool = True
+    z: Optional[float] = None
+    orientation: Optional[Tuple[float, float, float, float]] = None
 
 
 class SimScene:
@@ -146,6 +154,11 @@ class SimScene:
 
     # -- parts --------------------------------------------------------------------------
     def _shape(self, class_name: str) -> int:
+        if class_name not in self._shapes and class_name == FOREIGN_CLASS:
+            self._shapes[class_name] = p.createVisualShape(
+                p.GEOM_BOX, halfExtents=list(FOREIGN_HALF_EXTENTS),
+                visualFramePosition=[0, 0, FOREIGN_HALF_EXTENTS[2]], rgbaColor=list(FOREIGN_RGBA),
+                physicsClientId=self.client)
         if class_name not in self._shapes:
             part = part_class(class_name)
             vertices, indices, normals = part_mesh(part).arrays()
@@ -155,17 +168,17 @@ class SimScene:
         return self._shapes[class_name]
 
     def add_part(self, class_name: str, x: float, y: float, yaw: float = 0.0,
-                 part_id: Optional[int] = None) -> int:
-        """A part of ``class_name`` lying on the belt plane at (x, y, yaw); returns its id."""
-        part = part_class(class_name)
+                 part_id: Optional[int] = None, z: Optional[float] = None, orientation=None) -> int:
+        """A part of ``class_name`` (or FOREIGN_CLASS: an object of no known class) lying on
+        the belt plane at (x, y, yaw), or at height ``z`` with ``orientation``; returns its id.
+        The body is kinematic (mass 0, no collision): it is where it is put."""
         if part_id is None:
             part_id = self._next_id
         self._next_id = max(self._next_id, part_id + 1)
-        collision = p.createCollisionShape(p.GEOM_BOX, halfExtents=[part.length / 2, part.width / 2, part.height / 2],
-                                           physicsClientId=self.client)
-        body = p.createMultiBody(0.0, collision, self._shape(class_name), physicsClientId=self.client)
+        body = p.createMultiBody(0.0, -1, self._shape(class_name), physicsClientId=self.client)
         self._bodies[part_id] = body
-        self.parts[part_id] = PartState(part_id, class_name, x, y, yaw)
+        self.parts[part_id] = PartState(part_id, class_name, x, y, yaw, z is None, z,
+                                        None if orientation is None else tuple(orientation))
         self._place(part_id)
         return part_id
 
@@ -184,9 +197,10 @@ class SimScene:
 
     def _place(self, part_id: int):
         state = self.parts[part_id]
-        p.resetBasePositionAndOrientation(
-            self._bodies[part_id], [state.x, state.y, self.cell.belt.height],
-            p.getQuaternionFromEuler([0, 0, state.yaw]), physicsClientId=self.client)
+        z = self.cell.belt.height if state.z is None else state.z
+        orientation = p.getQuaternionFromEuler([0, 0, state.yaw]) if state.orientation is None else state.orientation
+        p.resetBasePositionAndOrientation(self._bodies[part_id], [state.x, state.y, z], orientation,
+                                          physicsClientId=self.client)
 
     def body_of(self, part_id: int) -> int:
         return self._bodies[part_id]
@@ -203,22 +217,28 @@ class SimScene:
                 state.on_belt = False
             self._place(part_id)
 
-    def part_poses(self) -> List[Tuple[int, str, float, float, float]]:
-        """(id, class, x, y, yaw) of every part: what a render process mirrors."""
-        return [(s.part_id, s.class_name, s.x, s.y, s.yaw) for s in self.parts.values()]
+    def part_poses(self) -> List[tuple]:
+        """(id, class, x, y, yaw) of every part on the belt, (id, class, x, y, yaw, z,
+        orientation) of the others: what a render process mirrors."""
+        return [(s.part_id, s.class_name, s.x, s.y, s.yaw) + (() if s.z is None else (s.z, s.orientation))
+                for s in self.parts.values()]
 
-    def set_part_poses(self, poses: Sequence[Tuple[int, str, float, float, float]]):
-        """Mirror another scene's parts: add, move and remove so that exactly ``poses`` exist."""
-        wanted = {int(pid): (name, x, y, yaw) for pid, name, x, y, yaw in poses}
+    def set_part_poses(self, poses: Sequence[tuple]):
+        """Mirror another scene's parts: add, move and remove so that exactly ``poses`` (as
+        ``part_poses`` gives them) exist."""
+        wanted = {int(pose[0]): pose[1:] for pose in poses}
         for part_id in [pid for pid in self.parts if pid not in wanted or self.parts[pid].class_name != wanted[pid][0]]:
             self.remove_part(part_id)
-        for part_id, (name, x, y, yaw) in wanted.items():
+        for part_id, (name, x, y, yaw, *above) in wanted.items():
+            z, orientation = above if above else (None, None)
             if part_id in self.parts:
                 state = self.parts[part_id]
-                state.x, state.y, state.yaw = x, y, yaw
+                state.x, state.y, state.yaw, state.z = x, y, yaw, z
+                state.orientation = None if orientation is None else tuple(orientation)
+                state.on_belt = z is None
                 self._place(part_id)
             else:
-                self.add_part(name, x, y, yaw, part_id=part_id)
+                self.add_part(name, x, y, yaw, part_id=part_id, z=z, orientation=orientation)
 
 
 def render_board_views(client, spec, camera, count: int, seed: int = 7) -> List[np.ndarray]:

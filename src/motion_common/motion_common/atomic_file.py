@@ -17,8 +17,9 @@ def _current_umask() -> int:
     return 0o022
 
 
-def write_atomic(path: str, text: str) -> str:
-    """Write ``text`` to ``path`` atomically; return the absolute path.
+def write_atomic(path: str, text) -> str:
+    """Write ``text`` (str, or bytes such as a PNG) to ``path`` atomically; return the
+    absolute path.
 
     The text goes to a temporary file in the same folder (same file system), is flushed and
     fsynced, then renamed over ``path`` (os.replace); the folder is fsynced so the rename
@@ -32,7 +33,8 @@ def write_atomic(path: str, text: str) -> str:
     try:
         # mkstemp makes the file owner-only; a saved program or template is a normal file.
         os.fchmod(fd, 0o666 & ~_current_umask())
-        with os.fdopen(fd, "w", encoding="utf-8") as stream:
+        binary = isinstance(text, (bytes, bytearray))
+        with (os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8")) as stream:
             stream.write(text)
             stream.flush()
             os.fsync(stream.fileno())

@@ -1,0 +1,338 @@
+"""The kitting cycle: take the next tracked part, intercept it on the moving belt, carry it
+to its class's slot, come back. Plain Python: the robot is any controller with the
+MotionControllerClient methods (move_l, move_j, set_gripper, get_pose), the parts come
+from ``observe`` (vision results, fed into a BeltTracker), the clock is injected.
+
+One pick (all heights are of the magnet face, ``cell.gripper.tcp_length`` below tool0):
+
+1. plan: the earliest intercept (``plan_intercept``) of the part inside the pick window,
+   given the time the arm needs to get above it plus the descent time;
+2. hover: MoveL to ``hover_height`` above the point where the descent must start, which is
+   upstream of the intercept by the belt travel during the descent; magnet on;
+3. wait for the start time (re-planned from the newest track), then descend diagonally,
+   with the belt, onto the part's top (MoveL) and lift straight up;
+4. verify with the camera: a part still seen on the belt where the track predicts it was
+   missed; it is retried while it is reachable, otherwise logged with the reason;
+5. carry (MoveL at ``transit_height``), lower into the slot, magnet off, lift.
+
+Every path is checked before it is sent: no point of the tool's magnet may come closer
+than ``clearance`` to the belt or the tray except the grasp and release points themselves
+(``check_segment``). The descent duration is learned from the measured moves.
+
+STOP, the server's latched stop and refusals come back as exceptions with a result code:
+the cycle ends with a ``failed`` event; a held part stays on the magnet; ``recover`` (after
+the latch is released) carries it to its slot.
+"""
+import copy
+import math
+import threading
+import time
+from dataclasses import dataclass
+from typing import Callable, Dict, List, Optional
+
+import numpy as np
+
+from motion_common.params import Param, ParamSchema
+
+from .cell import Cell
+from .intercept import plan_intercept
+from .parts import PART_CLASSES
+from .tracking import BeltTracker, Observation, Track
+
+PICKER_SCHEMA = ParamSchema([
+    Param("pick_window", [-0.45, -0.08], "m", "x range along the belt where parts are picked (inside the "
+          "camera's view, so a missed pick is seen)", length=2, low=-5.0, high=5.0),
+    Param("hover_height", 0.08, "m", "magnet face above a part's top before the descent", low=0.01, high=0.5),
+    Param("transit_height", 0.15, "m", "magnet face above the belt plane between belt and tray", low=0.02, high=1.0),
+    Param("place_height", 0.015, "m", "part bottom above the slot floor when released", low=0.0, high=0.2),
+    Param("grasp_gap", 0.002, "m", "magnet face above the part's top at the grasp point", low=-0.005, high=0.02),
+    Param("wait_position", [-0.20, 0.55, 0.35], "m", "where tool0 waits for parts", length=3, low=-3.0, high=3.0),
+    Param("descent_time", 0.7, "s", "first estimate of the descent move's duration (then measured)",
+          low=0.05, high=10.0),
+    Param("tool_speed", 0.35, "m/s", "average tool speed of the reach-time estimate", low=0.01, high=5.0),
+    Param("move_overhead", 0.6, "s", "fixed time per move of the reach-time estimate (accelerations, calls)",
+          low=0.0, high=10.0),
+    Param("plan_margin", 0.4, "s", "slack added to every intercept", low=0.0, high=10.0),
+    Param("min_confidence", 0.5, "", "detections below this confidence are never picked", low=0.0, high=1.0),
+    Param("min_hits", 3, "", "observations before a track is picked", low=1, high=100),
+    Param("max_attempts", 3, "", "picks tried per part while it is reachable", low=1, high=20),
+    Param("verify_time", 0.6, "s", "time after the lift in which a fresh sighting means a missed pick",
+          low=0.0, high=10.0),
+    Param("clearance", 0.004, "m", "smallest distance from the magnet to the belt or tray on any path",
+          low=0.0, high=0.2),
+    Param("tool_orientation", [1.0, 0.0, 0.0, 0.0], "", "tool0 quaternion (x, y, z, w) for picking: z down",
+          length=4, low=-1.0, high=1.0),
+])
+
+
+@dataclass
+class KittingEvent:
+    """What happened to a tracked part."""
+
+    track_id: int
+    class_name: str
+    event: str                 # tracked | planned | picked | missed | placed | skipped | failed
+    reason: str = ""
+    position: Optional[np.ndarray] = None
+    time: float = 0.0
+
+
+@dataclass
+class Box:
+    """An axis-aligned obstacle (belt or tray), m."""
+
+    name: str
+    low: np.ndarray
+    high: np.ndarray
+
+    def distance(self, point) -> float:
+        """Distance from ``point`` to the box (0 inside)."""
+        outside = np.maximum(np.maximum(self.low - point, point - self.high), 0.0)
+        return float(np.linalg.norm(outside))
+
+
+def cell_obstacles(cell: Cell) -> List[Box]:
+    """The belt body and the tray plate as boxes (the tray's yaw taken as its bounding box)."""
+    belt = cell.belt
+    boxes = [Box("belt", np.array([belt.x_start, belt.y - belt.width / 2, belt.height - belt.thickness]),
+                 np.array([belt.x_end, belt.y + belt.width / 2, belt.height]))]
+    tray = cell.tray
+    corners = np.array([[sx * tray.size[0] / 2, sy * tray.size[1] / 2] for sx in (-1, 1) for sy in (-1, 1)])
+    c, s = math.cos(tray.yaw), math.sin(tray.yaw)
+    corners = corners @ np.array([[c, s], [-s, c]]) + tray.position[:2]
+    boxes.append(Box("tray", np.r_[corners.min(axis=0), tray.position[2] - 0.01],
+                     np.r_[corners.max(axis=0), tray.position[2]]))
+    return boxes
+
+
+def check_segment(start, end, obstacles: List[Box], clearance: float, allowed_end: float = 0.0,
+                  step: float = 0.005) -> str:
+    """'' when the straight segment start->end of the magnet face keeps ``clearance`` from
+    every obstacle; else what it hits. The last ``allowed_end`` metres may come closer
+    (the descent onto a part lying on the belt)."""
+    start, end = np.asarray(start, float), np.asarray(end, float)
+    length = float(np.linalg.norm(end - start))
+    count = max(2, int(math.ceil(length / step)) + 1)
+    for k in range(count):
+        fraction = k / (count - 1)
+        if length * (1 - fraction) < allowed_end:
+            break
+        point = start + (end - start) * fraction
+        for box in obstacles:
+            if box.distance(point) < clearance:
+                return f"path passes {box.distance(point) * 1000:.1f} mm from the {box.name} at {np.round(point, 3).tolist()}"
+    return ""
+
+
+class PickAborted(Exception):
+    """A pick ended early; ``reason`` says why, ``result`` is the controller's code if any."""
+
+    def __init__(self, reason: str, result: int = 0):
+        super().__init__(reason)
+        self.reason, self.result = reason, result
+
+
+@dataclass
+class _PartRecord:
+    attempts: int = 0
+    done: bool = False
+
+
+class KittingPicker:
+    """Tracks parts and runs kitting cycles with ``controller``."""
+
+    def __init__(self, cell: Cell, controller, params: Optional[dict] = None, tracker_params: Optional[dict] = None,
+                 clock: Callable[[], float] = time.time, sleep: Callable[[float], None] = time.sleep,
+                 on_event: Callable[[KittingEvent], None] = lambda event: None, source: str = "kitting parameters"):
+        self.params = PICKER_SCHEMA.validate(params or {}, source)
+        if self.params["pick_window"][1] <= self.params["pick_window"][0]:
+            raise ValueError(f"{source}: pick_window must be [x_min, x_max] with x_min < x_max")
+        self.cell, self.controller = cell, controller
+        self.tracker = BeltTracker(dict(tracker_params or {}, initial_speed=cell.belt.speed))
+        self.clock, self.sleep, self.on_event = clock, sleep, on_event
+        self.obstacles = cell_obstacles(cell)
+        self.descent_time = self.params["descent_time"]
+        self.records: Dict[int, _PartRecord] = {}
+        self.holding: Optional[Track] = None
+        self.orientation = list(self.params["tool_orientation"])
+        self.cycle_times: List[float] = []
+        # observe() runs on the image callback's thread, the cycle on its own: the lock
+        # keeps a Kalman update from interleaving with a plan reading the same track.
+        self.lock = threading.Lock()
+
+    # -- perception --------------------------------------------------------------------------
+    def observe(self, stamp: float, parts):
+        """Feed one image's parts (objects with class_name, x, y, confidence) taken at ``stamp``."""
+        observations = [Observation(p.class_name, p.x, p.y, p.confidence) for p in parts
+                        if p.confidence >= self.params["min_confidence"] and p.class_name in PART_CLASSES]
+        with self.lock:
+            before = set(self.tracker.tracks)
+            self.tracker.update(stamp, observations)
+            new = [self.tracker.tracks[k] for k in set(self.tracker.tracks) - before]
+        for track in new:
+            self._emit(track, "tracked", position=np.r_[track.position, self.cell.belt.height])
+
+    # -- geometry ----------------------------------------------------------------------------
+    def _tool0(self, face) -> List[float]:
+        """tool0 position for a magnet face at ``face`` (the tool points down)."""
+        return (np.asarray(face, float) + [0.0, 0.0, self.cell.gripper.tcp_length]).tolist()
+
+    def _face_now(self) -> np.ndarray:
+        position, _ = self.controller.get_pose()
+        return np.asarray(position, float) - [0.0, 0.0, self.cell.gripper.tcp_length]
+
+    def _top(self, class_name: str) -> float:
+        return self.cell.belt.height + PART_CLASSES[class_name].height
+
+    def reach_time(self, start, point) -> float:
+        """Estimated time (s) from the magnet at ``start`` to hovering above ``point`` and
+        descending onto it: two moves' overhead, the travel at tool_speed, the descent."""
+        P = self.params
+        hover = np.array([point[0], point[1], self.cell.belt.height + P["hover_height"]])
+        return 2 * P["move_overhead"] + float(np.linalg.norm(hover - start)) / P["tool_speed"] + self.descent_time
+
+    # -- the cycle ---------------------------------------------------------------------------
+    def candidates(self) -> List[Track]:
+        """Confirmed tracks not done yet, nearest to leaving the pick window first."""
+        with self.lock:
+            out = [copy.deepcopy(t) for t in self.tracker.tracks.values()
+                   if t.hits >= self.params["min_hits"] and not self.records.get(t.track_id, _PartRecord()).done]
+        return sorted(out, key=lambda t: -t.position[0])
+
+    def run_once(self) -> Optional[KittingEvent]:
+        """Pick and place the next part if there is one; the final event, or None."""
+        for track in self.candidates():
+            record = self.records.setdefault(track.track_id, _PartRecord())
+            now = self.clock()
+            start = self._face_now()
+            x_min, x_max = self.params["pick_window"]
+            plan = plan_intercept(track.position, track.velocity, track.t, now,
+                                  lambda point: self.reach_time(start, point), x_min, x_max,
+                                  margin=self.params["plan_margin"])
+            if not plan.ok:
+                record.done = True
+                return self._emit(track, "skipped", plan.reason)
+            record.attempts += 1
+            started = now
+            try:
+                event = self._pick_and_place(track, plan.time)
+            except PickAborted as exc:
+                if self.holding is None:
+                    self._release_quietly()
+                if exc.result or record.attempts >= self.params["max_attempts"] or "missed" not in exc.reason:
+                    record.done = exc.result == 0 or self.holding is not None
+                    return self._emit(track, "failed", exc.reason)
+                return self._emit(track, "missed", exc.reason)
+            record.done = True
+            self.cycle_times.append(self.clock() - started)
+            return event
+        return None
+
+    def _move_l(self, face, allowed_end: float = 0.0, check_from=None):
+        """MoveL of the magnet face to ``face`` after checking the path against the cell."""
+        start = self._face_now() if check_from is None else check_from
+        problem = check_segment(start, face, self.obstacles, self.params["clearance"], allowed_end)
+        if problem:
+            raise PickAborted(f"path refused: {problem}")
+        try:
+            self.controller.move_l(self._tool0(face), self.orientation)
+        except Exception as exc:
+            if not hasattr(exc, "result"):
+                raise
+            raise PickAborted(f"move refused or interrupted: {exc}", int(exc.result)) from None
+
+    def _gripper(self, on: bool):
+        try:
+            self.controller.set_gripper(on)
+        except Exception as exc:
+            if not hasattr(exc, "result"):
+                raise
+            raise PickAborted(f"gripper command failed: {exc}", int(exc.result)) from None
+
+    def _release_quietly(self):
+        try:
+            self.controller.set_gripper(False)
+        except Exception:  # the controller is gone or latched: nothing is held anyway
+            pass
+
+    def _pick_and_place(self, track: Track, t_grasp: float) -> KittingEvent:
+        P = self.params
+        top = self._top(track.class_name)
+        point = track.predict_position(t_grasp)
+        velocity = track.velocity
+        hover = np.r_[point - velocity * self.descent_time, top + P["hover_height"]]
+        self._emit(track, "planned", f"intercept in {t_grasp - self.clock():.2f} s", np.r_[point, top])
+        start = self._face_now()
+        if start[2] < hover[2] - 1e-3:
+            self._move_l(np.r_[start[:2], hover[2]])
+        self._move_l(hover)
+        self._gripper(True)
+        # Start the descent so that it ends when the part arrives (newest estimate).
+        with self.lock:
+            latest = self.tracker.tracks.get(track.track_id, track)
+            point = latest.predict_position(t_grasp)
+        grasp = np.r_[point, top + P["grasp_gap"]]
+        wait = t_grasp - self.descent_time - self.clock()
+        if wait < -0.5 * self.descent_time:
+            raise PickAborted("missed: the arm reached the hover point too late for this intercept")
+        if wait > 0:
+            self.sleep(wait)
+        began = self.clock()
+        self._move_l(grasp, allowed_end=P["hover_height"] + 0.01, check_from=hover)
+        took = self.clock() - began
+        # Learn the descent time (the driver's timing, the machine's load): smoothed.
+        self.descent_time = 0.7 * self.descent_time + 0.3 * min(max(took, 0.05), 5.0)
+        lift = grasp + [0.0, 0.0, P["hover_height"]]
+        self._move_l(lift, check_from=grasp)
+        lifted_at = self.clock()
+        if P["verify_time"] > 0:
+            self.sleep(P["verify_time"])
+            with self.lock:
+                current = self.tracker.tracks.get(track.track_id)
+                seen = current is not None and current.misses == 0 and current.t > lifted_at
+            if seen:
+                raise PickAborted("missed: the part is still on the belt after the lift")
+        self.holding = track
+        self._emit(track, "picked", "", grasp)
+        return self.place_held()
+
+    def place_held(self) -> KittingEvent:
+        """Carry the held part to its class's slot and release it there."""
+        P = self.params
+        track = self.holding
+        slot = self.cell.tray.slot_for(track.class_name)
+        part = PART_CLASSES[track.class_name]
+        floor = self.cell.tray.position[2]
+        above = np.r_[slot.center[:2], self.cell.belt.height + P["transit_height"]]
+        release = np.r_[slot.center[:2], floor + P["place_height"] + part.height]
+        start = self._face_now()
+        if start[2] < above[2] - 1e-3:
+            self._move_l(np.r_[start[:2], above[2]])
+        self._move_l(above)
+        self._move_l(release)
+        self._gripper(False)
+        self.holding = None
+        self._move_l(above)
+        return self._emit(track, "placed", f"slot {slot.part_class}", release)
+
+    def go_to_wait(self):
+        """Tool to the wait position (MoveL at transit height first)."""
+        P = self.params
+        target = np.asarray(P["wait_position"], float) - [0.0, 0.0, self.cell.gripper.tcp_length]
+        start = self._face_now()
+        if start[2] < target[2] - 1e-3:
+            self._move_l(np.r_[start[:2], target[2]])
+        self._move_l(target)
+
+    def forget_finished(self):
+        """Drop records of tracks the tracker has stopped (bounded memory)."""
+        with self.lock:
+            live = set(self.tracker.tracks)
+        for track_id in [k for k in self.records if k not in live]:
+            del self.records[track_id]
+
+    def _emit(self, track: Track, event: str, reason: str = "", position=None) -> KittingEvent:
+        item = KittingEvent(track.track_id, track.class_name, event, reason,
+                            None if position is None else np.asarray(position, float), self.clock())
+        self.on_event(item)
+        return item
