@@ -1,12 +1,17 @@
 """Rendering in its own process: TinyRenderer holds the interpreter for ~100 ms per
 640x480 image, so a node steps physics in one process and renders in another.
 
-``RenderWorker`` starts a ``multiprocessing`` (spawn) process that owns a pybullet DIRECT
+``RenderWorker`` starts a process (this module, run by the same interpreter) that owns a pybullet DIRECT
 client with the cell built in it (``SimScene``). Each request sends the part poses
 (``SimScene.part_poses()``) and an optional camera pose; the worker mirrors them, renders
 and sends back the RGB image with the stamp it was asked for (the image shows the scene
 at that stamp)."""
-import multiprocessing as mp
+import os
+import subprocess
+import sys
+import tempfile
+import threading
+from multiprocessing.connection import Client, Listener
 from typing import Optional
 
 import numpy as np
@@ -25,7 +30,10 @@ def _serve(connection, cell_path, width, height, supersample):
         camera = camera.scaled(width, height)
     connection.send(("ready", None, None))
     while True:
-        message = connection.recv()
+        try:
+            message = connection.recv()
+        except EOFError:
+            break          # the parent is gone
         if message is None:
             break
         stamp, poses, camera_pose, lighting = message
@@ -35,19 +43,48 @@ def _serve(connection, cell_path, width, height, supersample):
     p.disconnect(client)
 
 
+def main(argv=None):
+    """Entry of the render process: ``python -m kitting.render_worker ADDRESS CELL W H S``
+    (the authentication key comes on stdin)."""
+    import signal
+    # Ctrl-C reaches the whole process group; the parent ends this process itself.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    address, cell_path, width, height, supersample = (argv or sys.argv)[1:6]
+    key = sys.stdin.buffer.readline().strip()
+    with Client(address, authkey=key) as connection:
+        _serve(connection, cell_path or None, int(width), int(height), int(supersample))
+
+
 class RenderWorker:
     """``with RenderWorker() as worker: image, stamp = worker.render(stamp, poses)``."""
 
     def __init__(self, cell_path: Optional[str] = None, width: Optional[int] = None,
                  height: Optional[int] = None, supersample: int = 1, timeout: float = 30.0):
-        context = mp.get_context("spawn")
-        self._connection, child = context.Pipe()
-        self._process = context.Process(target=_serve, args=(child, cell_path, width, height, supersample),
-                                         daemon=True)
-        self._process.start()
+        # A fresh interpreter running this module (not multiprocessing's spawn, which
+        # re-imports the caller's main script: a ROS node's relay script breaks that),
+        # connected over a private Unix socket.
+        self._folder = tempfile.mkdtemp(prefix="kitting-render-")
+        address = os.path.join(self._folder, "socket")
+        key = os.urandom(16).hex().encode()
+        self._listener = Listener(address, family="AF_UNIX", authkey=key)
+        self._process = subprocess.Popen(
+            [sys.executable, "-m", "kitting.render_worker", address, cell_path or "", str(width or 0),
+             str(height or 0), str(int(supersample))], stdin=subprocess.PIPE, stdout=subprocess.DEVNULL)
+        self._process.stdin.write(key + b"\n")
+        self._process.stdin.close()
+        self._connection = None
+        accepted = []
+        waiter = threading.Thread(target=lambda: accepted.append(self._listener.accept()), daemon=True)
+        waiter.start()
+        waiter.join(timeout)
+        if not accepted:
+            self.close()     # closing the listener ends the waiting accept()
+            raise RuntimeError(f"render worker did not connect within {timeout:.0f} s (exit code "
+                               f"{self._process.poll()}); run 'python -m kitting.render_worker' by hand to see why")
+        self._connection = accepted[0]
         if not self._connection.poll(timeout):
             self.close()
-            raise RuntimeError("render worker did not start")
+            raise RuntimeError("render worker did not start: it never said ready")
         self._connection.recv()
 
     def request(self, stamp: float, poses, camera_pose=None, lighting=None):
@@ -70,17 +107,30 @@ class RenderWorker:
         return self.result(timeout)
 
     def close(self):
-        if self._process.is_alive():
+        """Ask the render process to end; kill it if it does not within 5 s."""
+        if self._process.poll() is None:
             try:
-                self._connection.send(None)
+                if self._connection is not None:
+                    self._connection.send(None)
             except (BrokenPipeError, OSError):
                 pass
-            self._process.join(5.0)
-            if self._process.is_alive():
-                self._process.terminate()
+            try:
+                self._process.wait(5.0)
+            except subprocess.TimeoutExpired:
+                self._process.kill()
+                self._process.wait()
+        self._listener.close()
+        if os.path.isdir(self._folder):
+            for name in os.listdir(self._folder):
+                os.unlink(os.path.join(self._folder, name))
+            os.rmdir(self._folder)
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
         self.close()
+
+
+if __name__ == "__main__":
+    main()
