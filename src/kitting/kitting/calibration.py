@@ -113,9 +113,11 @@ def calibrate_intrinsics(images: Sequence[np.ndarray], spec: BoardSpec = BoardSp
                       len(objects), rejected)
 
 
-def write_intrinsics_yaml(path: str, intrinsics: Intrinsics, camera_name: str = "kitting_camera"):
-    """A ROS camera_info-style YAML (camera_calibration_parsers' format)."""
+def write_intrinsics_yaml(path: str, intrinsics: Intrinsics, camera_name: str = "kitting_camera") -> str:
+    """A ROS camera_info-style YAML (camera_calibration_parsers' format), written
+    atomically; returns the absolute path."""
     import yaml
+    from motion_common.atomic_file import write_atomic
     w, h = intrinsics.image_size
     K = intrinsics.K
     P = np.c_[K, np.zeros(3)]
@@ -129,8 +131,7 @@ def write_intrinsics_yaml(path: str, intrinsics: Intrinsics, camera_name: str = 
         "projection_matrix": {"rows": 3, "cols": 4, "data": [float(v) for v in P.ravel()]},
         "reprojection_error_px": float(intrinsics.rms),
     }
-    with open(path, "w", encoding="utf-8") as stream:
-        yaml.safe_dump(data, stream, sort_keys=False)
+    return write_atomic(path, yaml.safe_dump(data, sort_keys=False))
 
 
 # -- marker extrinsics ----------------------------------------------------------------------

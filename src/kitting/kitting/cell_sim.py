@@ -30,6 +30,7 @@ SPAWN_MARGIN = 0.03        # m, a new part's centre from the belt's upstream end
 SETTLE_SPEED = 0.01        # m/s, below this a falling part counts as still
 SETTLE_TIME = 0.2          # s, still for this long: resting
 MAX_CATCH_UP = 0.25        # s of physics stepped at most per advance(); more is an overrun
+TRAY_DEPTH = 0.05          # m above the tray floor that still counts as in the tray (stacked parts)
 PART_DENSITY_MASS = {"bolt": 0.025, "nut": 0.017, "washer": 0.004, FOREIGN_CLASS: 0.01}   # kg
 
 
@@ -251,10 +252,12 @@ class CellSimulation:
                 part.state = "gone"      # fell through the world: never counts as placed
 
     def _slot_of(self, part: _Part) -> str:
-        """Class of the tray slot whose footprint holds the part's centre, on the tray floor."""
+        """Class of the tray slot whose footprint holds the part's centre, in the tray (on its
+        floor, or on parts already in the slot)."""
         position, _ = p.getBasePositionAndOrientation(part.body, physicsClientId=self.client)
+        bottom = position[2] - part.half_extents[2]
         tray_floor = self.cell.tray.position[2]
-        if abs(position[2] - part.half_extents[2] - tray_floor) > 0.01:
+        if not tray_floor - 0.005 <= bottom <= tray_floor + TRAY_DEPTH:
             return ""
         for slot in self.cell.tray.slots:
             if slot.contains(position[:2]):

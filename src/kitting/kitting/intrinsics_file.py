@@ -15,12 +15,10 @@ tool saves).
 """
 import math
 import os
-import tempfile
 from typing import Callable, Optional
 
 from sensor_msgs.msg import CameraInfo
 
-from motion_common.atomic_file import write_atomic
 
 from .calibration import Intrinsics, write_intrinsics_yaml
 from .image_msgs import intrinsics_from_camera_info
@@ -32,12 +30,7 @@ class IntrinsicsFileError(Exception):
 
 def save_intrinsics_yaml(path: str, intrinsics: Intrinsics, camera_name: str = "kitting_camera") -> str:
     """Write the camera_info YAML of ``intrinsics`` atomically; return the absolute path."""
-    with tempfile.TemporaryDirectory(prefix="kitting_intrinsics_") as scratch:
-        draft = os.path.join(scratch, "intrinsics.yaml")
-        write_intrinsics_yaml(draft, intrinsics, camera_name)
-        with open(draft, encoding="utf-8") as stream:
-            text = stream.read()
-    return write_atomic(path, text)
+    return write_intrinsics_yaml(path, intrinsics, camera_name)
 
 
 def _matrix(data: dict, key: str, size: int, path: str, required: bool = True) -> Optional[list]:

@@ -27,6 +27,7 @@ import copy
 import math
 import threading
 import time
+from collections import deque
 from dataclasses import dataclass
 from typing import Callable, Dict, List, Optional
 
@@ -159,6 +160,7 @@ class KittingPicker:
         # observe() runs on the image callback's thread, the cycle on its own: the lock
         # keeps a Kalman update from interleaving with a plan reading the same track.
         self.lock = threading.Lock()
+        self.recent = deque()          # (stamp, Observation) of the last 3 s: the miss check
 
     # -- perception --------------------------------------------------------------------------
     def observe(self, stamp: float, parts):
@@ -166,6 +168,9 @@ class KittingPicker:
         observations = [Observation(p.class_name, p.x, p.y, p.confidence) for p in parts
                         if p.confidence >= self.params["min_confidence"] and p.class_name in PART_CLASSES]
         with self.lock:
+            self.recent.extend((stamp, o) for o in observations)
+            while self.recent and self.recent[0][0] < stamp - 3.0:
+                self.recent.popleft()
             before = set(self.tracker.tracks)
             self.tracker.update(stamp, observations)
             new = [self.tracker.tracks[k] for k in set(self.tracker.tracks) - before]
@@ -217,7 +222,9 @@ class KittingPicker:
             try:
                 event = self._pick_and_place(track, plan.time)
             except PickAborted as exc:
-                if self.holding is None:
+                if self.holding is None and "missed" not in exc.reason:
+                    # Nothing known to be held; after a suspected miss the magnet stays on
+                    # (if the part is held after all, it is never dropped onto the belt).
                     self._release_quietly()
                 if exc.result or record.attempts >= self.params["max_attempts"] or "missed" not in exc.reason:
                     record.done = exc.result == 0 or self.holding is not None
@@ -287,14 +294,20 @@ class KittingPicker:
         lifted_at = self.clock()
         if P["verify_time"] > 0:
             self.sleep(P["verify_time"])
-            with self.lock:
-                current = self.tracker.tracks.get(track.track_id)
-                seen = current is not None and current.misses == 0 and current.t > lifted_at
-            if seen:
+            if self._still_on_belt(latest, track.class_name, lifted_at):
                 raise PickAborted("missed: the part is still on the belt after the lift")
         self.holding = track
         self._emit(track, "picked", "", grasp)
         return self.place_held()
+
+    def _still_on_belt(self, track: Track, class_name: str, since: float, radius: float = 0.006) -> bool:
+        """Was the part seen after ``since`` where the belt would have carried it? A gripped
+        part hangs still under the magnet, seen ~2-3 cm from there by parallax, so a
+        sighting within ``radius`` of the belt prediction means the grasp missed."""
+        with self.lock:
+            recent = [(t, o) for t, o in self.recent if t > since and o.class_name == class_name]
+        return any(math.hypot(o.x - p[0], o.y - p[1]) < radius
+                   for t, o in recent for p in [track.predict_position(t)])
 
     def place_held(self) -> KittingEvent:
         """Carry the held part to its class's slot and release it there."""
