@@ -453,16 +453,6 @@ def test_closed_loop_stop_during_the_carry_fails_and_keeps_the_part(cell):
         sim.close()
 
 
-STOP_IN_LIFT_BUG = (
-    "picker.py run_once (line 227-228): on a PickAborted with a result code (STOP, result 15) "
-    "raised by the lift move, self.holding is still None (it is set only after the lift and "
-    "the verification, line 299), so run_once calls _release_quietly() -> set_gripper(False): "
-    "the part the magnet gripped during the descent is dropped, although the module docstring "
-    "(lines 21-23) says a held part stays on the magnet after STOP (the server refuses only "
-    "moves while latched, so SET_GRIPPER(False) is executed)")
-
-
-@pytest.mark.xfail(strict=True, reason=STOP_IN_LIFT_BUG)
 def test_closed_loop_stop_during_the_lift_keeps_the_gripped_part_on_the_magnet(cell):
     sim, fake, picker, events = _closed_loop(cell)
     stopped = []
@@ -479,9 +469,14 @@ def test_closed_loop_stop_during_the_lift_keeps_the_gripped_part_on_the_magnet(c
         assert stopped == [part]
         assert [e.event for e in events] == ["tracked", "planned", "failed"]
         assert "move refused or interrupted" in events[-1].reason
+        assert "magnet stays on" in events[-1].reason
         fake.sleep(1.0)
-        assert [on for _, on in fake.gripper_calls] == [True]        # actual: [True, False]
+        assert [on for _, on in fake.gripper_calls] == [True]
         assert sim.held == part and _state(sim, part).state == "held"
+        # Once the stop is released the held part goes to its slot.
+        picker.place_held()
+        fake.sleep(2.0)
+        assert _state(sim, part).state == "resting" and _state(sim, part).slot == "nut_silver"
     finally:
         sim.close()
 

@@ -155,6 +155,7 @@ class KittingPicker:
         self.descent_time = self.params["descent_time"]
         self.records: Dict[int, _PartRecord] = {}
         self.holding: Optional[Track] = None
+        self.magnet_on = False
         self.orientation = list(self.params["tool_orientation"])
         self.cycle_times: List[float] = []
         # observe() runs on the image callback's thread, the cycle on its own: the lock
@@ -222,9 +223,16 @@ class KittingPicker:
             try:
                 event = self._pick_and_place(track, plan.time)
             except PickAborted as exc:
+                if self.holding is None and self.magnet_on and exc.result:
+                    # Stopped with the magnet on: the part may hang from it. It stays on,
+                    # and the part is carried to its slot once the stop is released.
+                    self.holding = track
+                    record.done = True
+                    return self._emit(track, "failed", f"{exc.reason}; the magnet stays on: the part goes to "
+                                                       "its slot once the stop is released")
                 if self.holding is None and "missed" not in exc.reason:
-                    # Nothing known to be held; after a suspected miss the magnet stays on
-                    # (if the part is held after all, it is never dropped onto the belt).
+                    # Nothing held; after a suspected miss the magnet stays on instead (if
+                    # the part is held after all, it is never dropped onto the belt).
                     self._release_quietly()
                 if exc.result or record.attempts >= self.params["max_attempts"] or "missed" not in exc.reason:
                     record.done = exc.result == 0 or self.holding is not None
@@ -251,6 +259,7 @@ class KittingPicker:
     def _gripper(self, on: bool):
         try:
             self.controller.set_gripper(on)
+            self.magnet_on = on
         except Exception as exc:
             if not hasattr(exc, "result"):
                 raise
@@ -259,6 +268,7 @@ class KittingPicker:
     def _release_quietly(self):
         try:
             self.controller.set_gripper(False)
+            self.magnet_on = False
         except Exception:  # the controller is gone or latched: nothing is held anyway
             pass
 
