@@ -2,6 +2,7 @@
 intrinsics, marker extrinsics), detector and pixel-to-belt geometry on rendered images."""
 import math
 
+import cv2
 import numpy as np
 import pybullet as p
 import pytest
@@ -151,3 +152,67 @@ def test_detector_rejects_edge_parts_and_unknown_objects(client, cell, scene):
     assert observations == []
     reasons = sorted(r.reason for r in result.rejections)
     assert reasons == ["edge", "unknown object", "unknown object"]
+
+
+# Nuts far from the camera's nadir (the belt's far side, y = 0.78 m: 0.24 m off the camera,
+# ~0.33 m at the ends of the row) at the yaws where the old detector's aspect < 1.35 test
+# rejected them as "unknown object": parallax sweeps a 10.8 mm high nut's top face up to
+# 6-7 mm across the belt plane (aspect up to 1.43).
+NUT_ROW_X = (-0.52, -0.45, -0.38, -0.30, -0.22, -0.15, -0.08)
+NUT_YAWS_DEG = (0, 5, 15, 20, 35, 45, 55)
+
+
+def test_detector_classifies_nuts_of_both_colours_at_any_yaw_far_from_the_camera(client, cell, scene):
+    camera, vision = _vision(cell, 640, 480)
+    y = 0.78
+    failures = []
+    for yaw in NUT_YAWS_DEG:
+        for first, second in (("yellow", "silver"), ("silver", "yellow")):
+            for part_id in list(scene.parts):
+                scene.remove_part(part_id)
+            truth = [(f"nut_{first if i % 2 == 0 else second}", x) for i, x in enumerate(NUT_ROW_X)]
+            for name, x in truth:
+                scene.add_part(name, x, y, math.radians(yaw))
+            observations, result = vision.observe(render(client, camera))
+            for name, x in truth:
+                seen = [o for o in observations if math.hypot(o.x - x, o.y - y) < 0.003]
+                if [o.class_name for o in seen] != [name]:
+                    failures.append((name, x, yaw, [o.class_name for o in seen],
+                                     [r.detail for r in result.rejections]))
+    assert failures == []
+
+
+def test_detector_rejects_look_alikes_of_nuts_and_bolts(client, cell, scene):
+    """Boxes in the parts' colours and sizes: 15 and 18 mm cubes (90° corners, not a hexagon's
+    120°), a 45 x 13 x 13 mm bar (a bolt's size without the head standing out of the shaft),
+    a 20 x 20 x 2 mm tile; far from the nadir (largest parallax) and near it."""
+    camera, vision = _vision(cell, 640, 480)
+    silver, yellow = PART_CLASSES["nut_silver"].rgba, PART_CLASSES["nut_yellow"].rgba
+    objects = [((0.0075,) * 3, silver), ((0.009,) * 3, yellow), ((0.0225, 0.0065, 0.0065), silver),
+               ((0.01, 0.01, 0.001), yellow)]
+    for y in (0.78, 0.62):
+        for x, (half_extents, rgba) in zip((-0.50, -0.38, -0.22, -0.10), objects):
+            scene.add_foreign_object(half_extents=half_extents, x=x, y=y, yaw=0.4, rgba=rgba)
+    observations, result = vision.observe(render(client, camera))
+    assert observations == []
+    assert [r.reason for r in result.rejections] == ["unknown object"] * 8
+    assert all(r.detail for r in result.rejections)
+
+
+def test_shape_envelope_comes_from_the_parts_dimensions():
+    from kitting.detector import hull_widths, shape_envelope
+    nut = PART_CLASSES["nut_silver"]
+    envelope = shape_envelope(nut, 0.8)
+    assert envelope["width_min_mm"] == pytest.approx((18.0, 18.0 * 2 / math.sqrt(3)))
+    assert envelope["width_max_mm"][1] == pytest.approx(18.0 * 2 / math.sqrt(3) + 10.8 * 0.8)
+    assert envelope["area_mm2"][0] == pytest.approx(1e6 * nut.footprint_area)
+    # A regular hexagon 18 mm across flats, and the same swept by 6 mm (its top face seen
+    # obliquely): the narrowest width stays within [across flats, across corners].
+    r = 18.0 / math.sqrt(3)
+    hexagon = np.array([(r * math.cos(a), r * math.sin(a)) for a in np.arange(6) * math.pi / 3])
+    assert hull_widths(hexagon) == pytest.approx((18.0, 2 * r))
+    for angle in np.radians([0, 20, 45, 90]):
+        shifted = hexagon + 6.0 * np.array([math.cos(angle), math.sin(angle)])
+        points = np.vstack([hexagon, shifted]).astype(np.float32)
+        narrowest, widest = hull_widths(cv2.convexHull(points).reshape(-1, 2))
+        assert 18.0 - 1e-6 <= narrowest <= 2 * r + 1e-6 and widest <= 2 * r + 6.0 + 1e-6

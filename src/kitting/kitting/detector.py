@@ -10,11 +10,35 @@
 4. Colour: yellow = hue in [15, 40] (OpenCV's 0-180 scale) and saturated; silver = low
    saturation and bright. A blob whose pixels are neither, or a mix, is an unknown object.
 5. Shape, measured in millimetres on the belt plane (the contour is mapped through
-   ``to_plane``, so sizes do not depend on where the part lies in the image):
-   bolt = elongated (min-area-rectangle aspect > 2.2); washer = round with a hole (hole area
-   > 12 % of the outline); nut = compact, filled, hexagonal (6-ish polygon vertices). The
-   footprint area must match the class's (``parts.PartClass.footprint_area``) within
-   ``area_tolerance`` (50 %: oblique views add the side faces); otherwise the blob is an unknown object.
+   ``to_plane``, so sizes do not depend on where the part lies in the image): a blob with a
+   hole (hole area > 12 % of the outline) is a washer candidate, any other a bolt or nut
+   candidate. Its convex hull's narrowest and widest widths and its area must lie in the
+   class's envelope (``shape_envelope``), computed from the part's real dimensions
+   (``kitting.parts``: bolt 13 mm head across, 8 mm shaft, 45.3 mm long, 13 mm high; nut
+   M12 18 mm across flats, 20.8 mm across corners, 10.8 mm high; washer 20 mm outside,
+   10.5 mm bore, 2 mm high) widened by two effects that are not errors:
+
+   - parallax: ``to_plane`` maps every pixel onto the belt plane, but a part's top face lies
+     ``height`` above it, so the top face lands ``height * slope`` further from the
+     camera's nadir (slope = horizontal distance from the nadir / camera height above the
+     top, at most ``view_slope_max``). The silhouette on the plane is the footprint swept
+     by up to 8.6 mm (nut) or 10.4 mm (bolt): a width grows by at most the sweep, the
+     narrowest width stays between the footprint's narrowest and its width across the
+     sweep, the area grows by at most sweep x the footprint's diameter, and corners only
+     open (a convex outline swept along a segment keeps its corners or splits them in two).
+     The old fixed test "aspect < 1.35" rejected nuts swept by more than ~3.5 mm (parts
+     more than ~0.17 m from the nadir, at the yaws where a corner points along the sweep);
+   - pixels: every silhouette edge lies within ``edge_tolerance_px`` of the true outline
+     (binarisation of an image without anti-aliasing), converted to mm at the blob.
+     findContours runs through the boundary pixels' centres, half a pixel inside the
+     edge: the widths get one pixel back and the area is the blob's pixel count times the
+     pixel's area on the plane.
+
+   A nut's hull must moreover simplify to 5-10 vertices (a swept hexagon has 6-8) whose
+   smallest corner is at least ``nut_corner_min`` (hexagon 120°, box 90°); a bolt's head must
+   stand out of its shaft by 13 - 8 = 5 mm (``head_step``; a bar of a bolt's size has no
+   step). A blob that fits no envelope is an unknown object; the reason names each
+   candidate and the measures that failed.
 
 Each detection has a class, the pixel centroid, an image orientation (rad; the bolt's
 axis, the nut's flat direction mod 60°, 0 for a washer) and a confidence in [0, 1] from the
@@ -29,7 +53,7 @@ import numpy as np
 
 from motion_common.params import Param, ParamSchema
 
-from .parts import PART_CLASSES
+from .parts import BOLT_HEAD, BOLT_SHAFT, PART_CLASSES
 
 DETECTOR_SCHEMA = ParamSchema([
     Param("value_min", 95, "0-255", "V above which a grey pixel is foreground (silver)", low=0, high=255),
@@ -38,10 +62,28 @@ DETECTOR_SCHEMA = ParamSchema([
     Param("min_area_px", 25, "px", "smaller blobs are noise", low=1, high=100000),
     Param("edge_px", 2, "px", "blobs this close to the image or belt border are 'edge'", low=0, high=100),
     Param("colour_purity_min", 0.75, "", "fraction of a blob's pixels of one colour", low=0.0, high=1.0),
-    Param("area_tolerance", 0.5, "", "relative footprint area error accepted", low=0.01, high=2.0),
-    Param("bolt_aspect_min", 2.2, "", "length/width above which a blob is a bolt", low=1.0, high=20.0),
+    # A pixel is drawn when its centre is inside the part: an edge is within half a pixel,
+    # plus margin for the pixel's shape on the plane. A width may be off by 2 x this (one
+    # edge per side), an area by perimeter x this.
+    Param("edge_tolerance_px", 0.75, "px", "how far a silhouette edge may lie from the part's true outline",
+          low=0.0, high=10.0),
+    # The cell's camera (config/cell.yaml) is 0.55 m above the belt; the visible belt reaches
+    # 0.42 m from its nadir: slope 0.42 / (0.55 - 0.013) = 0.79.
+    Param("view_slope_max", 0.8, "", "largest horizontal distance of a part from the camera's nadir "
+          "/ camera height above the part's top, over the belt in view (parallax bound)", low=0.0, high=5.0),
+    Param("area_tolerance", 0.1, "", "relative footprint area error accepted beyond the parallax and pixel bounds",
+          low=0.0, high=2.0),
+    # A hexagon's corners are 120°, a box's 90°; parallax only opens corners (module docstring,
+    # 5.), pixels blur them: at 640x480 nuts measure >= 106°, boxes <= 94° (at 320x240 ~1 % of
+    # nuts fall below 100° and boxes reach 97°: the two are no longer told apart reliably).
+    Param("nut_corner_min", 100.0, "deg", "smallest corner of a nut's simplified outline", low=0.0, high=180.0),
     Param("hole_ratio_min", 0.12, "", "hole/outline area above which a blob is a washer", low=0.0, high=1.0),
 ])
+
+# A nut's hull is simplified to within a tenth of its width across flats (1.8 mm): above the
+# pixel staircase (about 1 px = 0.9 mm at 640x480, 1.8 mm at 320x240), below the 5.2 mm by
+# which each corner of the hexagon stands out of the chord between its neighbours.
+NUT_POLYGON_EPSILON_MM = 0.1 * 1000.0 * PART_CLASSES["nut_yellow"].width
 
 
 @dataclass
@@ -154,43 +196,78 @@ class ClassicalDetector:
         fractions = {"yellow": float(yellow[inside].sum()) / count, "silver": float(silver[inside].sum()) / count}
         colour = max(fractions, key=fractions.get)
         purity = fractions[colour]
-        # Shape in millimetres on the belt plane.
-        outline = self.to_plane(contour.reshape(-1, 2).astype(float)) * 1000.0
-        outline_area = abs(cv2.contourArea(outline.astype(np.float32)))
-        hole_area = sum(abs(cv2.contourArea((self.to_plane(h.reshape(-1, 2).astype(float)) * 1000.0).astype(np.float32)))
-                        for h in holes)
-        (_, _), (rw, rh), _ = cv2.minAreaRect(outline.astype(np.float32))
-        aspect = max(rw, rh) / max(min(rw, rh), 1e-6)
-        hole_ratio = hole_area / max(outline_area, 1e-6)
-        hull = cv2.convexHull(outline.astype(np.float32))
-        perimeter = cv2.arcLength(hull, True)
-        vertices = len(cv2.approxPolyDP(hull, 0.06 * perimeter / 6, True))
-        features = {"area_mm2": outline_area - hole_area, "aspect": aspect, "hole_ratio": hole_ratio,
-                    "vertices": vertices, "purity": purity, "colour": colour}
         if purity < P["colour_purity_min"]:
             result.rejections.append(Rejection("unknown object", centroid, f"colour: {fractions}"))
             return
-        if aspect >= P["bolt_aspect_min"]:
-            kind = "bolt"
-        elif hole_ratio >= P["hole_ratio_min"]:
-            kind = "washer"
-        elif aspect < 1.35 and 5 <= vertices <= 10:
-            kind = "nut"
+        # Shape in millimetres on the belt plane. findContours traces the centres of the
+        # blob's boundary pixels, half a pixel inside its edge (outline and holes alike):
+        # widths get that pixel back, and the area is the blob's pixel count (a pixel is
+        # drawn when its centre is inside the part) times the pixel's area on the plane.
+        outline = (self.to_plane(contour.reshape(-1, 2).astype(float)) * 1000.0).astype(np.float32)
+        outline_area = abs(cv2.contourArea(outline))
+        hole_area = sum(abs(cv2.contourArea((self.to_plane(h.reshape(-1, 2).astype(float)) * 1000.0).astype(np.float32)))
+                        for h in holes)
+        pixel_mm, pixel_mm2, pixel_mm_max = self._pixel_size(centroid)
+        hull = cv2.convexHull(outline)
+        width_min, width_max = hull_widths(hull.reshape(-1, 2))
+        polygon = cv2.approxPolyDP(hull, NUT_POLYGON_EPSILON_MM, True).reshape(-1, 2)
+        # How far a width may be off: an edge per side, in mm at the blob (the pixel's longer side).
+        tolerance = P["edge_tolerance_px"] * pixel_mm_max
+        features = {"area_mm2": count * pixel_mm2, "width_min_mm": width_min + pixel_mm,
+                    "width_max_mm": width_max + pixel_mm, "head_step_mm": head_step(outline),
+                    "hole_ratio": hole_area / max(outline_area, 1e-6),
+                    "vertices": len(polygon), "corner_min_deg": smallest_corner(polygon),
+                    "tolerance_mm": tolerance, "purity": purity, "colour": colour}
+        kinds = ("washer",) if features["hole_ratio"] >= P["hole_ratio_min"] else ("bolt", "nut")
+        mismatches = []
+        for kind in kinds:
+            part = PART_CLASSES[f"{kind}_{colour}"]
+            misfit, excess = self._misfit(part, features, tolerance)
+            if not misfit:
+                break
+            mismatches.append(f"not a {kind}: {misfit}")
         else:
-            result.rejections.append(Rejection("unknown object", centroid, f"shape: {features}"))
-            return
-        part = PART_CLASSES[f"{kind}_{colour}"]
-        expected = part.footprint_area * 1e6
-        area_error = abs(features["area_mm2"] - expected) / expected
-        if area_error > P["area_tolerance"]:
-            result.rejections.append(Rejection("unknown object", centroid,
-                                               f"{kind}-like but area {features['area_mm2']:.0f} mm² (expected {expected:.0f})"))
+            result.rejections.append(Rejection("unknown object", centroid, "; ".join(mismatches)))
             return
         angle = self._angle(contour, kind)
-        confidence = purity * math.exp(-area_error)
+        confidence = purity * math.exp(-0.5 * excess)
         if kind == "nut":
-            confidence *= 1.0 if vertices == 6 else 0.8
+            confidence *= 1.0 if features["vertices"] == 6 else 0.8
         result.detections.append(Detection(part.name, centroid, angle, float(confidence), features))
+
+    def _misfit(self, part, features, tolerance) -> Tuple[str, float]:
+        """('', excess) if the blob's features fit ``part``'s envelope (module docstring, 5.),
+        else (which measures fail, excess). ``excess``: the worst feature's distance beyond
+        the parallax-only envelope, in units of its pixel tolerance (0: inside, <= 1: fits)."""
+        P = self.params
+        envelope = shape_envelope(part, P["view_slope_max"])
+        misfits, excess = [], 0.0
+        for name, bounds in envelope.items():
+            if name == "perimeter_mm":
+                continue
+            low, high = bounds
+            if name == "area_mm2":   # a band along the outline, plus the relative tolerance
+                slack = envelope["perimeter_mm"] * tolerance + P["area_tolerance"] * low
+            else:                    # a width, or the difference of two: one edge on each side
+                slack = 2.0 * tolerance
+            value = features[name]
+            beyond = max(low - value, value - high, 0.0) / max(slack, 1e-9)
+            excess = max(excess, beyond)
+            if beyond > 1.0:
+                misfits.append(f"{name.rsplit('_', 1)[0]} {value:.1f} outside [{low - slack:.1f}, {high + slack:.1f}]")
+        if part.kind == "nut" and not 5 <= features["vertices"] <= 10:
+            misfits.append(f"{features['vertices']} vertices (hexagon: 6-8)")
+        if part.kind == "nut" and features["corner_min_deg"] < P["nut_corner_min"]:
+            misfits.append(f"a {features['corner_min_deg']:.0f}° corner (hexagon: 120°)")
+        return ", ".join(misfits), excess
+
+    def _pixel_size(self, pixel) -> Tuple[float, float, float]:
+        """A pixel at ``pixel`` on the belt plane: (mean side mm, area mm², longer side mm)."""
+        pixel = np.asarray(pixel, float)
+        a, bx, by = self.to_plane(np.vstack([pixel, pixel + (1.0, 0.0), pixel + (0.0, 1.0)])) * 1000.0
+        (ux, uy), (vx, vy) = bx - a, by - a
+        area = abs(float(ux * vy - uy * vx))
+        return math.sqrt(area), area, float(max(np.linalg.norm(bx - a), np.linalg.norm(by - a)))
 
     @staticmethod
     def _angle(contour, kind) -> float:
@@ -201,6 +278,96 @@ class ClassicalDetector:
         if kind == "bolt":
             return angle if w >= h else angle + math.pi / 2
         return angle % (math.pi / 3)
+
+
+def hull_widths(hull: np.ndarray) -> Tuple[float, float]:
+    """(narrowest, widest) width of a convex polygon (N x 2, in order): the narrowest is
+    across one of its edges (rotating calipers), the widest its diameter."""
+    hull = np.asarray(hull, float).reshape(-1, 2)
+    if len(hull) < 3:
+        extent = float(np.ptp(hull, axis=0).max()) if len(hull) else 0.0
+        return 0.0, extent
+    edges = np.roll(hull, -1, axis=0) - hull
+    lengths = np.linalg.norm(edges, axis=1)
+    keep = lengths > 1e-9
+    normals = np.c_[edges[keep, 1], -edges[keep, 0]] / lengths[keep, None]
+    projections = hull @ normals.T
+    narrowest = float((projections.max(axis=0) - projections.min(axis=0)).min())
+    widest = float(np.sqrt(((hull[:, None, :] - hull[None, :, :]) ** 2).sum(axis=2).max()))
+    return narrowest, widest
+
+
+def smallest_corner(polygon: np.ndarray) -> float:
+    """Degrees, the smallest interior angle of a convex polygon (N x 2; 180 below 3 vertices)."""
+    polygon = np.asarray(polygon, float).reshape(-1, 2)
+    if len(polygon) < 3:
+        return 180.0
+    before, after = np.roll(polygon, 1, axis=0) - polygon, np.roll(polygon, -1, axis=0) - polygon
+    cosine = (before * after).sum(axis=1) / np.maximum(
+        np.linalg.norm(before, axis=1) * np.linalg.norm(after, axis=1), 1e-12)
+    return float(np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0))).min())
+
+
+def head_step(outline: np.ndarray, bins: int = 20) -> float:
+    """mm by which the wider end of an elongated blob (N x 2 outline, mm) stands out of its
+    middle: the widest of the end fifths' cross-widths minus the median cross-width of the
+    far 40-90 % of its length, along its min-area rectangle's long axis. A bolt's head is
+    5 mm wider than its shaft; a bar of its size has none."""
+    outline = np.asarray(outline, float).reshape(-1, 2)
+    (cx, cy), (w, h), angle = cv2.minAreaRect(outline.astype(np.float32))
+    angle = math.radians(angle if w >= h else angle + 90.0)
+    axis = np.array([math.cos(angle), math.sin(angle)])
+    along = (outline - (cx, cy)) @ axis
+    across = (outline - (cx, cy)) @ np.array([-axis[1], axis[0]])
+    span = along.max() - along.min()
+    if span <= 0:
+        return 0.0
+    index = np.minimum(((along - along.min()) / span * bins).astype(int), bins - 1)
+    top, bottom = np.full(bins, -np.inf), np.full(bins, np.inf)
+    np.maximum.at(top, index, across)
+    np.minimum.at(bottom, index, across)
+    profile = np.where(np.isfinite(top), top - bottom, np.nan)
+    end = bins // 5
+    if np.isnan(profile[:end]).all() or np.isnan(profile[-end:]).all():
+        return 0.0
+    if np.nanmax(profile[:end]) < np.nanmax(profile[-end:]):
+        profile = profile[::-1]
+    middle = profile[int(0.4 * bins):int(0.9 * bins)]
+    if np.isnan(middle).all():
+        return 0.0
+    return float(np.nanmax(profile[:end]) - np.nanmedian(middle))
+
+
+def shape_envelope(part, view_slope_max: float) -> dict:
+    """What a part's silhouette, mapped onto the belt plane, measures when the part lies
+    flat anywhere in a view whose slope is at most ``view_slope_max`` (module docstring,
+    5.), before pixel tolerances: {feature: (low, high)} for "width_min_mm",
+    "width_max_mm", "area_mm2" (and the bolt's "head_step_mm"), and "perimeter_mm" (the
+    footprint's, for the area's pixel band). All from ``kitting.parts``'s dimensions."""
+    sweep = 1000.0 * part.height * view_slope_max          # mm, the top face's largest displacement
+    area = 1e6 * part.footprint_area
+    if part.kind == "nut":
+        across_flats = 1000.0 * part.width                  # 18 mm (ISO 4032 M12)
+        across_corners = across_flats * 2.0 / math.sqrt(3)  # 20.8 mm: also the diameter
+        return {"width_min_mm": (across_flats, across_corners),
+                "width_max_mm": (across_corners, across_corners + sweep),
+                "area_mm2": (area, area + sweep * across_corners),
+                "perimeter_mm": 3.0 * across_corners}
+    if part.kind == "washer":
+        diameter, bore = 1000.0 * part.width, 1000.0 * part.bore   # 20 / 10.5 mm (ISO 7089 M10)
+        # The sweep also narrows the see-through bore (where the top and bottom openings overlap).
+        return {"width_min_mm": (diameter, diameter), "width_max_mm": (diameter, diameter + sweep),
+                "area_mm2": (area, area + sweep * (diameter + bore)),
+                "perimeter_mm": math.pi * (diameter + bore)}
+    head = 1000.0 * BOLT_HEAD[1]                            # 13 mm head across flats (ISO 4017 M8)
+    shaft = 1000.0 * BOLT_SHAFT[0]                          # 8 mm
+    length = 1000.0 * part.length                           # 45.3 mm head + shaft
+    diameter = math.hypot(length, (head + shaft) / 2.0)     # a head corner to the shaft end's far corner
+    # The head (13 mm high) sweeps further than the shaft's top (10.5 mm): the step can only grow.
+    # Its upper end is left open: a head swept along the shaft widens the head end further.
+    return {"width_min_mm": (head, head + sweep), "width_max_mm": (diameter, diameter + sweep),
+            "area_mm2": (area, area + sweep * diameter), "head_step_mm": (head - shaft, math.inf),
+            "perimeter_mm": 2.0 * (length + head)}
 
 
 def belt_mask_for(camera, belt, shrink: float = 0.0) -> np.ndarray:
