@@ -126,6 +126,14 @@ def check_image(image) -> str:
     return ""
 
 
+def input_problem(image, belt_mask=None) -> str:
+    """'' when a detector can use ``image`` with ``belt_mask`` (or None), else why not."""
+    problem = check_image(image)
+    if not problem and belt_mask is not None and belt_mask.shape != image.shape[:2]:
+        problem = f"image size {image.shape[1]}x{image.shape[0]} does not match the belt mask"
+    return problem
+
+
 class ClassicalDetector:
     """Colour + shape detector. ``belt_mask``: uint8 mask (255 = belt) of the image size, or
     None for the whole image. ``to_plane(pixels N x 2) -> N x 2 metres`` on the belt plane
@@ -142,7 +150,7 @@ class ClassicalDetector:
 
     def detect(self, image) -> DetectionResult:
         result = DetectionResult()
-        problem = check_image(image)
+        problem = input_problem(image, self.belt_mask)
         if problem:
             result.rejections.append(Rejection("corrupt image", detail=problem))
             return result
@@ -154,9 +162,6 @@ class ClassicalDetector:
         silver = (sat < P["saturation_min"] * 0.5) & (val >= P["value_min"])
         foreground = (val >= P["value_min"]) | (sat >= P["saturation_min"])
         region = np.full((h, w), 255, np.uint8) if self.belt_mask is None else self.belt_mask
-        if region.shape != (h, w):
-            result.rejections.append(Rejection("corrupt image", detail=f"image size {w}x{h} does not match the belt mask"))
-            return result
         mask = np.where(foreground & (region > 0), 255, 0).astype(np.uint8)
         # Edge zone: the image border and the belt region's border.
         edge = P["edge_px"] + 1

@@ -61,7 +61,7 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 import cv2
 import numpy as np
 
-from .detector import Detection, DetectionResult, Rejection, check_image
+from .detector import Detection, DetectionResult, Rejection, input_problem
 from .parts import PART_CLASSES
 
 LETTERBOX_GREY = 114
@@ -236,14 +236,11 @@ class OnnxDetector:
 
     def detect(self, image) -> DetectionResult:
         result = DetectionResult()
-        problem = check_image(image)
+        problem = input_problem(image, self.belt_mask)
         if problem:
             result.rejections.append(Rejection("corrupt image", detail=problem))
             return result
         h, w = image.shape[:2]
-        if self.belt_mask is not None and self.belt_mask.shape != (h, w):
-            result.rejections.append(Rejection("corrupt image", detail=f"image size {w}x{h} does not match the belt mask"))
-            return result
         blob, (sx, sy), (left, top) = self.preprocess(image)
         output = self.session.run([self.output_name], {self.input_name: blob})[0]
         output = np.asarray(output, np.float32)
