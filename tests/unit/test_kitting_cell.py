@@ -78,7 +78,7 @@ def _move_face(sim, target, speed=0.25):
 
 
 def _belt_x(sim, part_id):
-    return sim.parts[part_id].x
+    return float(_state(sim, part_id).position[0])
 
 
 # -- CellSimulation -------------------------------------------------------------------------------

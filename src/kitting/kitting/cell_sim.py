@@ -47,10 +47,10 @@ class CellPartState:
 
 
 class _Part:
-    def __init__(self, part_id, class_name, x, y, yaw):
+    def __init__(self, part_id, class_name):
         self.part_id, self.class_name = part_id, class_name
-        self.x, self.y, self.yaw = x, y, yaw
         self.state = "belt"
+        self.final_pose = None                 # (x, y, yaw) where it fell off the belt's end
         self.body: Optional[int] = None        # dynamic body once off the belt
         self.constraint: Optional[int] = None
         self.still_since: Optional[float] = None
@@ -114,9 +114,9 @@ class CellSimulation:
             raise ValueError(f"y_offset {y_offset} m puts the part off the belt (half width {belt.width / 2} m)")
         part_id = self._next_id
         self._next_id += 1
-        part = _Part(part_id, class_name, belt.x_start + SPAWN_MARGIN, belt.y + y_offset, yaw)
-        self.parts[part_id] = part
-        self.scene.add_part(class_name, part.x, part.y, yaw, part_id=part_id)
+        self.parts[part_id] = _Part(part_id, class_name)
+        # The scene owns a belt part's pose and moves it (SimScene.step).
+        self.scene.add_part(class_name, belt.x_start + SPAWN_MARGIN, belt.y + y_offset, yaw, part_id=part_id)
         return part_id
 
     def clear(self):
@@ -148,17 +148,12 @@ class CellSimulation:
         if dt <= 0:
             return
         self.time = float(t)
-        belt = self.cell.belt
-        for part_id, part in list(self.parts.items()):
-            if part.state != "belt":
-                continue
-            part.x += self.belt_speed * dt
-            if part.x > belt.x_end:
-                part.state = "gone"     # fell off the belt's end: out of the cell
+        self.scene.step(dt, self.belt_speed)
+        for part_id, state in list(self.scene.parts.items()):
+            if not state.on_belt:       # fell off the belt's end: out of the cell
+                part = self.parts[part_id]
+                part.state, part.final_pose = "gone", (state.x, state.y, state.yaw)
                 self.scene.remove_part(part_id)
-                continue
-            self.scene.parts[part_id].x = part.x
-            self.scene._place(part_id)
         self._update_magnet()
         if dt > MAX_CATCH_UP:
             # Far behind (a busy machine): skip ahead rather than run physics in a burst.
@@ -208,19 +203,28 @@ class CellSimulation:
         if best is not None:
             self._attach(best[1], face)
 
+    def _belt_pose(self, part: _Part):
+        """(x, y, yaw) of a part on the belt, or where it fell off the belt's end."""
+        if part.part_id in self.scene.parts:
+            state = self.scene.parts[part.part_id]
+            return state.x, state.y, state.yaw
+        return part.final_pose
+
     def _centre_and_top(self, part: _Part):
         if part.state == "belt":
-            return np.array([part.x, part.y, self.cell.belt.height]), self.cell.belt.height + 2 * part.half_extents[2]
+            x, y, _ = self._belt_pose(part)
+            return np.array([x, y, self.cell.belt.height]), self.cell.belt.height + 2 * part.half_extents[2]
         position, _ = p.getBasePositionAndOrientation(part.body, physicsClientId=self.client)
         return np.array(position), position[2] + part.half_extents[2]
 
     def _attach(self, part: _Part, face):
         """Grip ``part``: it becomes a dynamic body hanging from the magnet (fixed constraint)."""
         if part.state == "belt":
+            x, y, yaw = self._belt_pose(part)
             self.scene.remove_part(part.part_id)
             half = part.half_extents
-            position = [part.x, part.y, self.cell.belt.height + half[2]]
-            orientation = p.getQuaternionFromEuler([0, 0, part.yaw])
+            position = [x, y, self.cell.belt.height + half[2]]
+            orientation = p.getQuaternionFromEuler([0, 0, yaw])
             shape = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=self.client)
             part.body = p.createMultiBody(PART_DENSITY_MASS[part.kind], shape, -1, position, orientation,
                                           physicsClientId=self.client)
@@ -279,8 +283,9 @@ class CellSimulation:
         out = []
         for part in self.parts.values():
             if part.body is None:
-                position = np.array([part.x, part.y, self.cell.belt.height])
-                orientation = np.array(p.getQuaternionFromEuler([0, 0, part.yaw]))
+                x, y, yaw = self._belt_pose(part)
+                position = np.array([x, y, self.cell.belt.height])
+                orientation = np.array(p.getQuaternionFromEuler([0, 0, yaw]))
             else:
                 position, orientation = (np.array(v) for v in p.getBasePositionAndOrientation(
                     part.body, physicsClientId=self.client))
@@ -295,8 +300,7 @@ class CellSimulation:
             if state.state == "gone":
                 continue
             if state.state == "belt":
-                part = self.parts[state.part_id]
-                poses.append((state.part_id, state.class_name, part.x, part.y, part.yaw))
+                poses.append((state.part_id, state.class_name) + self._belt_pose(self.parts[state.part_id]))
             else:
                 poses.append((state.part_id, state.class_name, float(state.position[0]), float(state.position[1]),
                               0.0, float(state.position[2]), tuple(float(v) for v in state.orientation)))

@@ -205,14 +205,16 @@ class SimScene:
     def body_of(self, part_id: int) -> int:
         return self._bodies[part_id]
 
-    def step(self, dt: float):
-        """Move every part still on the belt by speed * dt along +x; a part past the belt's
-        end leaves the belt (stays where it fell off: it is no longer moved)."""
+    def step(self, dt: float, speed: Optional[float] = None):
+        """Move every part still on the belt by speed * dt along +x (``speed`` m/s, default
+        the cell's belt speed); a part past the belt's end leaves the belt (stays where it
+        fell off: it is no longer moved)."""
         belt = self.cell.belt
+        speed = belt.speed if speed is None else speed
         for part_id, state in self.parts.items():
             if not state.on_belt:
                 continue
-            state.x += belt.speed * dt
+            state.x += speed * dt
             if state.x > belt.x_end:
                 state.on_belt = False
             self._place(part_id)

@@ -64,17 +64,20 @@ class VisionPipeline:
         self.params = VISION_SCHEMA.validate(params or {}, source)
         self.cell = cell
         self.camera = PinholeCamera(int(width), int(height), np.asarray(K, float), np.asarray(distortion, float))
-        self.detector_params = detector_params
-        self._onnx = None
+        # The detector and BeltVision are built once; a new registration only gives them
+        # the camera pose and the belt mask it implies (_set_pose).
         if self.params["detector"] == "onnx":
             from .onnx_detector import OnnxDetector   # onnxruntime only when asked for
             if not self.params["onnx_model"]:
                 raise ValueError(f"{source}: detector is 'onnx' but onnx_model is empty: give the model's path")
-            self._onnx = OnnxDetector(self.params["onnx_model"])
+            detector = OnnxDetector(self.params["onnx_model"])
+        else:
+            detector = ClassicalDetector(params=detector_params, to_plane=lambda px: pixels_to_plane(
+                self._vision.camera, px, cell.belt.height)[:, :2])
+        self._vision = BeltVision(self.camera, cell.belt, detector=detector)
         self._registrations = deque(maxlen=self.params["registration_window"])
         self.registration_time: Optional[float] = None
         self.camera_pose: Optional[np.ndarray] = None
-        self._vision: Optional[BeltVision] = None
         self.counts = Counter()
 
     # -- registration ------------------------------------------------------------------------
@@ -111,15 +114,8 @@ class VisionPipeline:
     def _set_pose(self, pose):
         self.camera_pose = pose
         camera = self.camera.with_pose(pose)
-        belt = self.cell.belt
-        if self._onnx is not None:
-            self._onnx.belt_mask = belt_mask_for(camera, belt, self.params["belt_edge_margin"])
-            self._vision = BeltVision(camera, belt, detector=self._onnx)
-        else:
-            detector = ClassicalDetector(
-                belt_mask=belt_mask_for(camera, belt, self.params["belt_edge_margin"]), params=self.detector_params,
-                to_plane=lambda px: pixels_to_plane(camera, px, belt.height)[:, :2])
-            self._vision = BeltVision(camera, belt, detector=detector)
+        self._vision.camera = camera
+        self._vision.detector.belt_mask = belt_mask_for(camera, self.cell.belt, self.params["belt_edge_margin"])
 
     # -- per image ---------------------------------------------------------------------------
     def process(self, image_rgb, stamp: float) -> VisionResult:
