@@ -12,7 +12,7 @@ APPS = os.path.join(ROOT, "src", "motion_apps")
 if APPS not in sys.path:
     sys.path.insert(0, APPS)
 
-from motion_apps.program import Program, Waypoint  # noqa: E402
+from motion_commander.program import Program, Waypoint  # noqa: E402
 from motion_apps.program_check import (ProgramChecker, check_params, load_check_params,  # noqa: E402
                                        load_scene_file)
 from motion_common.errors import ParameterError  # noqa: E402

@@ -1,4 +1,4 @@
-"""motion_apps.program: validation with clear errors, round trip, and crash-safe saving."""
+"""motion_commander.program: validation with clear errors, round trip, and crash-safe saving."""
 import os
 import random
 import signal
@@ -16,7 +16,7 @@ APPS = os.path.join(ROOT, "src", "motion_apps")
 if APPS not in sys.path:
     sys.path.insert(0, APPS)
 
-from motion_apps.program import Program, ProgramError, Waypoint, load_program, save_program  # noqa: E402
+from motion_commander.program import Program, ProgramError, Waypoint, load_program, save_program  # noqa: E402
 
 JOINTS = [0.1, -1.4, 1.6, -1.8, -1.57, 0.1]
 
@@ -91,7 +91,7 @@ def test_an_invalid_program_is_never_written(tmp_path):
 SAVER = textwrap.dedent("""
     import sys
     sys.path[:0] = {paths!r}
-    from motion_apps.program import Program, Waypoint, save_program
+    from motion_commander.program import Program, Waypoint, save_program
     J = [0.1, -1.4, 1.6, -1.8, -1.57, 0.1]
     def make(tag, count):
         return Program(robot="ur5e", waypoints=[Waypoint(f"{{tag}}{{i}}", [-0.4, -0.2 + 0.001 * i, 0.2],
@@ -109,7 +109,7 @@ SAVER = textwrap.dedent("""
 def test_a_killed_save_leaves_the_old_or_the_new_program(tmp_path):
     """SIGKILL a process saving old/new programs in a loop, 50 times at random (seeded)
     moments: the file always parses and is exactly one of the two programs."""
-    paths = [os.path.join(ROOT, "src", p) for p in ("motion_common", "motion_apps")]
+    paths = [os.path.join(ROOT, "src", p) for p in ("motion_common", "motion_commander")]
     script = tmp_path / "saver.py"
     script.write_text(SAVER.format(paths=paths))
     target = str(tmp_path / "prog.yaml")

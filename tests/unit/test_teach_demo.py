@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from conftest import ROOT
-from motion_apps.program import load_program
+from motion_commander.program import load_program
 from motion_apps.teach import TeachSession, load_gesture_config
 from motion_apps.teach_report import placement_error, plot_taught_path, taught_place, write_summary
 from motion_sensor.gesture_frame import frames_from_recording

@@ -10,7 +10,7 @@ APPS = os.path.join(ROOT, "src", "motion_apps")
 if APPS not in sys.path:
     sys.path.insert(0, APPS)
 
-from motion_apps.program import load_program  # noqa: E402
+from motion_commander.program import load_program  # noqa: E402
 from motion_apps.teach import (DEFAULT_GESTURES, TeachSession, check_gesture_config,  # noqa: E402
                                load_gesture_config)
 from motion_common.errors import ParameterError  # noqa: E402

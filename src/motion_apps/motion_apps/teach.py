@@ -29,7 +29,7 @@ from typing import Callable, Dict, List, Optional
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema, read_yaml_file
 
-from .program import Program, ProgramError, Waypoint, save_program
+from motion_commander.program import Program, ProgramError, Waypoint, save_program
 
 COMMANDS = ("mark_waypoint", "grip", "release", "undo", "save")
 DEFAULT_PROGRAMS_DIR = os.path.join("output", "programs")

@@ -12,7 +12,7 @@ import numpy as np
 
 from motion_common.atomic_file import write_atomic
 
-from .program import Program
+from motion_commander.program import Program
 
 
 def taught_place(program: Program) -> Optional[np.ndarray]:

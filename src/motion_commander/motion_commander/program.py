@@ -100,7 +100,7 @@ class Program:
                 "waypoints": [w.to_dict() for w in self.waypoints]}
 
     def to_yaml(self) -> str:
-        return ("# Gesture-taught program (motion_apps.program, format_version 1): positions in m "
+        return ("# Gesture-taught program (motion_commander.program, format_version 1): positions in m "
                 "(robot base frame),\n# orientations quaternion x, y, z, w, joints in rad, speed a "
                 "fraction (0, 1], action none|grip|release.\n"
                 + yaml.dump(self.to_dict(), Dumper=_Dumper, sort_keys=False, default_flow_style=None, width=200))
