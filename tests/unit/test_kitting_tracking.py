@@ -1,6 +1,5 @@
 """Kitting: constant-velocity belt tracking (filterpy) and intercept planning, on seeded
 synthetic data."""
-import math
 
 import numpy as np
 import pytest

@@ -9,7 +9,7 @@ the figures and ``table`` the per-class table; ``plot_confusion`` draws the conf
 matrix.
 """
 import math
-from collections import Counter, defaultdict
+from collections import Counter
 from dataclasses import asdict, dataclass, field
 from typing import Dict, List, Optional, Sequence
 

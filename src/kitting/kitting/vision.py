@@ -1,9 +1,7 @@
 """From pixels to parts on the belt: the detector's output turned into belt-plane poses in
 the robot base frame with the calibrated camera (``kitting.geometry``)."""
 from dataclasses import dataclass
-from typing import List, Optional
-
-import numpy as np
+from typing import Optional
 
 from .camera import PinholeCamera
 from .cell import Belt
