@@ -86,7 +86,7 @@ def main(argv=None) -> int:
     headline = {k: summary[k] for k in ("trials", "success_rate", "pose_error_mm_p50", "pose_error_mm_p95",
                                         "picks_per_minute", "spawn_to_place_s_p50", "spawn_to_place_s_p99",
                                         "physics_real_time_factor_min", "physics_real_time_factor_mean",
-                                        "wall_time_s") if k in summary}
+                                        "unverified_picks", "wall_time_s") if k in summary}
     write_results("kitting_campaign", summary, show=False)
     print(json.dumps(headline, indent=2))
     print(f"confusion matrix: {os.path.join(RESULTS, 'kitting_campaign_confusion.png')}")

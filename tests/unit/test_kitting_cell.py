@@ -306,6 +306,8 @@ class FakeController:
         self.moves, self.gripper_calls, self.frames = [], [], 0
         self.fail_next_move = 0          # result code raised halfway through the next move_l
         self.before_move = None          # called with each move_l target before it starts
+        self.blind_after_grip = False    # the camera stops delivering once the magnet is on
+        self.blind = False
         sim.set_tool_pose(self.position, self.orientation)
 
     # -- the controller interface the picker uses
@@ -333,6 +335,7 @@ class FakeController:
 
     def set_gripper(self, on):
         self.gripper_calls.append((self.t, bool(on)))
+        self.blind = self.blind or (self.blind_after_grip and bool(on))
         self.sim.set_magnet(bool(on))
 
     def sleep(self, duration):
@@ -345,7 +348,7 @@ class FakeController:
         self.t += dt
         self.sim.set_tool_pose(self.position, self.orientation)
         self.sim.advance(self.t)
-        if self.observe is not None and self.t >= self.next_frame - 1e-9:
+        if self.observe is not None and not self.blind and self.t >= self.next_frame - 1e-9:
             self.next_frame = self.t + self.frame_period
             self.frames += 1
             seen = [PartObservation(s.class_name, float(s.position[0] + self.rng.normal(0, self.noise)),
@@ -400,6 +403,32 @@ def test_closed_loop_each_class_ends_in_its_slot(cell, class_name):
         x_min, x_max = picker.params["pick_window"]
         assert x_min - 0.01 <= picked.position[0] <= x_max + 0.01
         assert len(picker.cycle_times) == 1 and picker.cycle_times[0] > 0
+    finally:
+        sim.close()
+
+
+def test_closed_loop_pick_without_an_image_after_the_lift_is_placed_but_marked_unverified(cell):
+    sim, fake, picker, events = _closed_loop(cell)
+    fake.blind_after_grip = True          # e.g. the camera lost its registration mid-pick
+    try:
+        part = sim.spawn("nut_silver")
+        _run(picker, fake, events, ("placed", "skipped", "failed", "missed"))
+        fake.sleep(1.0)
+        picked = [e for e in events if e.event == "picked"]
+        assert len(picked) == 1 and picked[0].reason.startswith("unverified: no camera image since the lift"), \
+            [(e.event, e.reason) for e in events]
+        assert events[-1].event == "placed"
+        assert (_state(sim, part).state, _state(sim, part).slot) == ("resting", "nut_silver")
+    finally:
+        sim.close()
+
+
+def test_closed_loop_with_images_after_the_lift_the_pick_is_verified(cell):
+    sim, fake, picker, events = _closed_loop(cell)
+    try:
+        sim.spawn("nut_silver")
+        _run(picker, fake, events, ("placed", "skipped", "failed", "missed"))
+        assert [e.reason for e in events if e.event == "picked"] == [""]
     finally:
         sim.close()
 
@@ -554,7 +583,8 @@ def _stats_scenario():
                           [("nut_yellow", -0.25, 0.70), ("bolt_silver", -0.403, 0.654)])
     for part_id, events in {1: ["tracked", "planned", "picked", "placed"],
                             2: ["tracked", "planned", "picked", "placed"],
-                            4: ["tracked", "planned", "picked", "placed"]}.items():
+                            4: ["tracked", "planned", "picked: unverified: no camera image since the lift",
+                                "placed"]}.items():
         for event in events:
             stats.add_event(part_id, event)
     stats.add_event(42, "picked")          # unknown part: ignored
@@ -571,6 +601,7 @@ def test_campaign_stats_on_a_hand_made_scenario():
     assert summary["trials"] == 4 and summary["successes"] == 2
     assert summary["success_rate"] == pytest.approx(0.5)
     assert summary["unmatched_detections"] == 2        # the far one and the held one
+    assert summary["unverified_picks"] == 1            # part 4's pick
     errors = [1.0, 3.0, 1.0, 2.0, 4.0, 5.0]            # mm, as the sightings were placed
     assert summary["pose_samples"] == len(errors)
     assert summary["pose_error_mm_p50"] == pytest.approx(2.5, abs=1e-6)
@@ -593,6 +624,7 @@ def test_campaign_stats_on_a_hand_made_scenario():
     assert (row["trials"], row["detected"], row["classified"], row["picked"], row["placed"]) == (1, 0, 0, 0, 0)
     assert math.isnan(row["pose_error_mm_p95"])
     assert table["nut_silver"]["trials"] == 0 and table["bolt_yellow"]["trials"] == 0
+    assert table["washer_yellow"]["picked"] == 1       # an unverified pick is still a pick
 
     matrix = stats.confusion()
     labels = list(CLASS_NAMES) + [UNKNOWN]

@@ -76,7 +76,12 @@ class PartRecord:
 
     @property
     def picked(self) -> bool:
-        return "picked" in self.events
+        return any(event.split(":")[0] == "picked" for event in self.events)
+
+    @property
+    def unverified_picks(self) -> int:
+        """Picks the camera could not confirm (no image after the lift)."""
+        return sum(event.startswith("picked: unverified") for event in self.events)
 
     @property
     def success(self) -> bool:
@@ -138,6 +143,7 @@ class CampaignStats:
             "spawn_to_place_s_p50": float(np.percentile(cycle, 50)) if cycle else math.nan,
             "spawn_to_place_s_p99": float(np.percentile(cycle, 99)) if cycle else math.nan,
             "unmatched_detections": self.unmatched_detections,
+            "unverified_picks": sum(r.unverified_picks for r in records),
             "per_class": self.per_class(),
             "failures": [{"trial": r.trial.index, "class": r.trial.class_name, "state": r.final_state,
                           "slot": r.slot, "predicted": r.predicted, "events": r.events, "reason": r.reason}

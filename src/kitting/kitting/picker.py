@@ -162,6 +162,7 @@ class KittingPicker:
         # keeps a Kalman update from interleaving with a plan reading the same track.
         self.lock = threading.Lock()
         self.recent = deque()          # (stamp, Observation) of the last 3 s: the miss check
+        self.last_image = -math.inf    # stamp of the newest processed image, parts or not
 
     # -- perception --------------------------------------------------------------------------
     def observe(self, stamp: float, parts):
@@ -169,6 +170,7 @@ class KittingPicker:
         observations = [Observation(p.class_name, p.x, p.y, p.confidence) for p in parts
                         if p.confidence >= self.params["min_confidence"] and p.class_name in PART_CLASSES]
         with self.lock:
+            self.last_image = max(self.last_image, stamp)
             self.recent.extend((stamp, o) for o in observations)
             while self.recent and self.recent[0][0] < stamp - 3.0:
                 self.recent.popleft()
@@ -302,13 +304,25 @@ class KittingPicker:
         lift = grasp + [0.0, 0.0, P["hover_height"]]
         self._move_l(lift, check_from=grasp)
         lifted_at = self.clock()
+        unverified = ""
         if P["verify_time"] > 0:
             self.sleep(P["verify_time"])
-            if self._still_on_belt(latest, track.class_name, lifted_at):
+            if not self._image_since(lifted_at):
+                self.sleep(P["verify_time"])      # one more window: the vision may lag behind
+            if not self._image_since(lifted_at):
+                # Without an image the miss check cannot run: carry on (the part is most
+                # likely on the magnet) but say so, so that a campaign counts it apart.
+                unverified = "unverified: no camera image since the lift (is the camera registered?)"
+            elif self._still_on_belt(latest, track.class_name, lifted_at):
                 raise PickAborted("missed: the part is still on the belt after the lift")
         self.holding = track
-        self._emit(track, "picked", "", grasp)
+        self._emit(track, "picked", unverified, grasp)
         return self.place_held()
+
+    def _image_since(self, since: float) -> bool:
+        """Has an image taken after ``since`` been processed (with or without parts)?"""
+        with self.lock:
+            return self.last_image > since
 
     def _still_on_belt(self, track: Track, class_name: str, since: float, radius: float = 0.006) -> bool:
         """Was the part seen after ``since`` where the belt would have carried it? A gripped
