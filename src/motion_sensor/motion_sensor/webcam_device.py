@@ -1,0 +1,205 @@
+"""A webcam (or a video file) with MediaPipe Hands as a HandDevice (nodes/webcam_hand_driver).
+
+- ``camera`` >= 0 opens that OpenCV VideoCapture device and streams in tracking mode; a
+  camera that cannot be opened or stops delivering is reopened with backoff. Each message
+  carries the time its frame was grabbed.
+- ``video`` = FILE plays the file once at its own frame rate, one message per frame, each
+  stamped with its frame's time in the file mapped onto the clock; at the end it raises
+  EndOfStream, so the node reports ~finished and exits, as the replay does.
+
+Frames that fail to decode are counted (``decode_failures``) and skipped. Frames that
+decode but show nothing usable (black, saturated, no hand) go out as hands_num 0 (see
+``motion_sensor.webcam_hand``).
+"""
+import os
+from typing import Callable, Optional
+
+from motion_common.params import Param, ParamSchema
+
+from .device import HandDevice
+from .errors import DeviceUnavailable, EndOfStream, MotionSensorError
+from .hand_landmarks import GestureThresholds, Intrinsics
+from .hand_sample import HandSample
+from .webcam_hand import FrameLimits, WebcamHandTracker
+
+CALIBRATION_KEYS = ("depth_scale",)
+
+
+def load_depth_scale(path: str) -> float:
+    """``depth_scale`` from a calibration YAML written by webcam_hand_calibrate; raises
+    MotionSensorError naming the file when it cannot be used."""
+    import yaml
+
+    try:
+        with open(path, encoding="utf-8") as fh:
+            data = yaml.safe_load(fh)
+    except (OSError, yaml.YAMLError) as exc:
+        raise MotionSensorError(f"cannot read webcam calibration {path}: {exc}; "
+                                "run webcam_hand_calibrate or leave calibration_file empty") from None
+    value = data.get("depth_scale") if isinstance(data, dict) else None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.05 <= value <= 20:
+        raise MotionSensorError(f"{path}: depth_scale must be a number in [0.05, 20], got {value!r}")
+    return float(value)
+
+
+class WebcamHandDevice(HandDevice):
+    """A webcam or a video file, hands found by a detector (MediaPipe Hands by default)."""
+
+    name = "webcam"
+    default_frame_id = "webcam"
+    finite = True           # a video file ends (EndOfStream); a camera never does
+    params = ParamSchema([
+        Param("camera", 0, low=-1, doc="OpenCV camera index; -1 none (then video must be set)"),
+        Param("video", "", doc="play this video file once instead of a camera"),
+        Param("width", 640, unit="px", low=0, doc="requested camera frame width (0: the camera's default)"),
+        Param("height", 480, unit="px", low=0, doc="requested camera frame height (0: the camera's default)"),
+        Param("fps", 30.0, unit="Hz", low=0, doc="requested camera frame rate (0: the camera's default)"),
+        Param("hfov_deg", 60.0, unit="deg", low=10, high=170, doc="horizontal field of view, used when fx is 0"),
+        Param("fx", 0.0, unit="px", low=0, doc="focal length x; 0: from hfov_deg and the frame width"),
+        Param("fy", 0.0, unit="px", low=0, doc="focal length y; 0: equal to fx"),
+        Param("cx", 0.0, unit="px", low=0, doc="principal point x; 0: the image centre"),
+        Param("cy", 0.0, unit="px", low=0, doc="principal point y; 0: the image centre"),
+        Param("depth_scale", 1.0, low=0.05, high=20, doc="true / estimated depth (one-time calibration)"),
+        Param("calibration_file", "", doc="YAML with depth_scale (webcam_hand_calibrate); overrides depth_scale"),
+        Param("mirrored", False, doc="frames are a mirror (selfie) view; they are flipped back before detection"),
+        Param("primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"),
+        Param("max_num_hands", 2, low=1, high=4, doc="hands MediaPipe looks for (2: engage:=gesture needs a second)"),
+        Param("model_complexity", 1, low=0, high=1, doc="MediaPipe landmark model: 0 lite, 1 full"),
+        Param("min_detection_confidence", 0.5, low=0, high=1, doc="MediaPipe palm detection threshold"),
+        Param("min_tracking_confidence", 0.5, low=0, high=1, doc="MediaPipe landmark tracking threshold"),
+        Param("static_image_mode", False, doc="detect on every frame instead of tracking (several times slower)"),
+        Param("black_level", 12.0, low=0, high=255, doc="mean grey (0-255) below which a frame is black"),
+        Param("saturated_fraction", 0.8, low=0, high=1, doc="fraction of white pixels above which a frame is saturated"),
+        Param("curl_open_deg", 60.0, unit="deg", low=0, high=180, doc="finger curl (sum of its joint bends) counted as open (grab 0)"),
+        Param("curl_fist_deg", 230.0, unit="deg", low=0, high=180, doc="finger curl counted as closed (grab 1)"),
+        Param("pinch_touch_m", 0.02, unit="m", low=0, doc="thumb-finger tip distance counted as touching (pinch 1)"),
+        Param("pinch_open_m", 0.07, unit="m", low=0, low_open=True, doc="thumb-finger tip distance counted as apart (pinch 0)"),
+    ])
+
+    def __init__(self, config, detector_factory: Callable[[dict], object] = None,
+                 capture_factory: Callable = None, **kw):
+        super().__init__(config, **kw)
+        cfg = self.config
+        if not cfg["video"] and cfg["camera"] < 0:
+            raise MotionSensorError("give a camera index (camera >= 0) or a video file (video:=FILE)")
+        if cfg["video"] and not os.path.isfile(cfg["video"]):
+            raise MotionSensorError(f"video file {cfg['video']} does not exist")
+        if cfg["curl_fist_deg"] <= cfg["curl_open_deg"] or cfg["pinch_open_m"] <= cfg["pinch_touch_m"]:
+            raise MotionSensorError("need curl_fist_deg > curl_open_deg and pinch_open_m > pinch_touch_m")
+        depth_scale = load_depth_scale(cfg["calibration_file"]) if cfg["calibration_file"] else cfg["depth_scale"]
+        self._detector_factory = detector_factory or _mediapipe_factory
+        self._capture_factory = capture_factory
+        self.tracker = WebcamHandTracker(
+            detector=None, frame_id=self.frame_id, intrinsics=self._intrinsics(), hfov_deg=cfg["hfov_deg"],
+            depth_scale=depth_scale, primary_hand=cfg["primary_hand"],
+            thresholds=GestureThresholds(cfg["curl_open_deg"], cfg["curl_fist_deg"], cfg["pinch_touch_m"],
+                                         cfg["pinch_open_m"]),
+            limits=FrameLimits(black_level=cfg["black_level"], saturated_fraction=cfg["saturated_fraction"]),
+            mirrored=cfg["mirrored"])
+        self.tracker.counters = self.counters  # one set of counters on /diagnostics
+        self._capture = None
+        self._fps = 0.0
+        self._frame_count = 0
+        self._index = 0          # frames grabbed from the video
+        self._origin = None      # clock time of the video's frame 0
+
+    def _intrinsics(self) -> Optional[Intrinsics]:
+        cfg = self.config
+        if cfg["fx"] <= 0:
+            return None
+        if cfg["cx"] <= 0 or cfg["cy"] <= 0:
+            raise MotionSensorError("with fx set, give cx and cy too (pixels), or leave fx 0 to use hfov_deg")
+        return Intrinsics(cfg["fx"], cfg["fy"] or cfg["fx"], cfg["cx"], cfg["cy"])
+
+    def describe(self) -> str:
+        return f"webcam video {self.config['video']}" if self.config["video"] else f"webcam {self.config['camera']}"
+
+    def _new_capture(self, source):
+        if self._capture_factory is not None:
+            return self._capture_factory(source)
+        import cv2
+
+        return cv2.VideoCapture(source)
+
+    def open(self) -> None:
+        import cv2
+
+        if self.tracker.detector is None:  # built once, kept across reconnects (loading takes ~0.5 s)
+            self.tracker.detector = self._detector_factory(self.config)
+        video = self.config["video"]
+        capture = self._new_capture(video if video else self.config["camera"])
+        if not capture.isOpened():
+            capture.release()
+            if video:  # a file that OpenCV cannot read will not heal: stop the node
+                raise MotionSensorError(f"OpenCV cannot open video {video} (not a video, or an unsupported codec)")
+            raise DeviceUnavailable(f"cannot open camera {self.config['camera']} (unplugged, or busy?)")
+        if video:
+            self._fps = float(capture.get(cv2.CAP_PROP_FPS) or 0.0)
+            if not self._fps > 0:
+                capture.release()
+                raise MotionSensorError(f"video {video} has no frame rate; re-encode it (e.g. ffmpeg -r 30)")
+            self._frame_count = int(capture.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+            if self._index == 0:
+                self.info(f"playing {video}: {self._frame_count} frames at {self._fps:.2f} fps")
+        else:
+            for prop, key in ((cv2.CAP_PROP_FRAME_WIDTH, "width"), (cv2.CAP_PROP_FRAME_HEIGHT, "height"),
+                              (cv2.CAP_PROP_FPS, "fps")):
+                if self.config[key] > 0:
+                    capture.set(prop, self.config[key])
+        self._capture = capture
+
+    def _next_video_frame(self):
+        """(decoded frame or None, stamp) of the video's next frame at its due time; raises
+        EndOfStream after the last one."""
+        if not self._capture.grab():
+            if self._frame_count and self._index < self._frame_count:
+                self.counters["decode_failures"] += self._frame_count - self._index
+                self.warn(f"video ended after {self._index} of {self._frame_count} frames")
+            raise EndOfStream()
+        period = 1.0 / self._fps
+        if self._origin is None:
+            self._origin = self.clock()
+        due = self._origin + self._index * period
+        self._index += 1
+        delay = due - self.clock()
+        if delay > 0:
+            self.sleep(delay)
+        elif delay < -period:  # fell behind (a stall): play on from now rather than burst
+            self.counters["late_frames"] += 1
+            self._origin -= delay
+            due -= delay
+        ok, frame = self._capture.retrieve()
+        return (frame if ok else None), due
+
+    def read(self, now: float) -> Optional[HandSample]:
+        if self.config["video"]:
+            frame, stamp = self._next_video_frame()
+        else:
+            if not self._capture.grab():
+                raise DeviceUnavailable(f"camera {self.config['camera']} stopped delivering frames")
+            stamp = self.clock()  # the frame has just arrived: its grab time
+            ok, frame = self._capture.retrieve()
+            frame = frame if ok else None
+        if frame is None:
+            self.counters["decode_failures"] += 1
+            self.warn(f"{self.describe()}: a frame failed to decode; skipped")
+            return None
+        return self.tracker.process(frame, stamp)
+
+    def close(self) -> None:
+        if self._capture is not None:
+            self._capture.release()
+            self._capture = None
+
+    def shutdown(self) -> None:
+        if self.tracker.detector is not None:
+            self.tracker.detector.close()
+
+
+def _mediapipe_factory(config: dict):
+    from .mediapipe_hands import MediaPipeHandDetector
+
+    return MediaPipeHandDetector(max_num_hands=config["max_num_hands"], model_complexity=config["model_complexity"],
+                                 min_detection_confidence=config["min_detection_confidence"],
+                                 min_tracking_confidence=config["min_tracking_confidence"],
+                                 static_image_mode=config["static_image_mode"])
