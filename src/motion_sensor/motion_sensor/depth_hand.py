@@ -1,0 +1,272 @@
+"""Hand tracking in a depth image, without ROS: nearest blob, palm centre, orientation.
+
+``DepthHandTracker.track(depth_m, intrinsics)`` finds the hand as the depth camera sees
+an operator reaching towards it (the paper's Kinect set-up):
+
+1. **Blob.** Pixels inside the working volume (``min_depth_m``..``max_depth_m`` along the
+   optical axis, ``max_lateral_m`` either side) and no more than ``band_depth_m`` behind
+   the nearest of them are split into connected components. A component whose physical
+   area (pixels times their footprint at its depth) lies in ``min_blob_area_m2``..
+   ``max_blob_area_m2`` is a hand (with its forearm); the nearest is the primary hand, the
+   next one a second hand (``hands_num`` 2, used by the gesture clutch). The body, a wall
+   or a table merged with the hand is too large and means "no hand".
+2. **Palm centre.** The maximum of the blob's distance transform (cv2.distanceTransform):
+   the palm is the widest part of hand plus forearm, and the search is kept within
+   ``palm_search_depth_m`` of the blob's front so a forearm tilted away cannot win. The
+   centroid of the transform's ridge (within ``ridge_px`` of the maximum) gives a sub-pixel
+   centre; the median depth in a disc around it back-projects it with the intrinsics. This
+   is the seen palm *surface*, a constant palm half-thickness in front of the palm centre.
+3. **Orientation** from principal axes: the palm normal is the least-variance axis of the
+   3-D points of the palm disc, the hand axis the main axis of the points within
+   ``hand_radius_m`` of the centre (made orthogonal to the normal), pointing away from the
+   forearm (the blob's points beyond 1.4 times that radius, past the fingertips) or, when no forearm is seen, as in the
+   previous frame. ``palm_faces_camera`` says which way the back of the hand is.
+4. **Fields**: ``hand_type`` by configuration or by position (``by_position``: a hand on the
+   camera's left, +y, is the operator's right hand facing the camera); ``grab_strength``
+   from how far the blob reaches beyond the palm along the hand axis (fingers curled in a
+   fist reach less); ``hand_id`` changes when the hand is lost or jumps.
+
+Positions and orientations come out in the camera's REP 103 body frame (x forward along
+the optical axis, y left, z up), as hand.msg wants; the hand frame is hand.msg's (x along
+the fingers, z out of the back of the hand).
+"""
+from dataclasses import dataclass, field
+from typing import Optional, Tuple
+
+import cv2
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from motion_common.params import Param, ParamSchema
+
+from .depth_image import Intrinsics
+
+TRACKER_PARAMS = ParamSchema([
+    Param("min_depth_m", 0.35, unit="m", low=0.05, doc="working volume: nearest depth along the optical axis"),
+    Param("max_depth_m", 1.3, unit="m", low=0.1, doc="working volume: farthest depth along the optical axis"),
+    Param("max_lateral_m", 0.6, unit="m", low=0.05, doc="working volume: half width and half height around the axis"),
+    Param("band_depth_m", 0.25, unit="m", low=0.02, doc="blob pixels lie at most this far behind the nearest one"),
+    Param("min_blob_area_m2", 0.003, unit="m^2", low=0, doc="a smaller blob is noise, not a hand"),
+    Param("max_blob_area_m2", 0.06, unit="m^2", low=0, low_open=True,
+          doc="a larger blob is the body or furniture, not a hand with its forearm"),
+    Param("palm_search_depth_m", 0.12, unit="m", low=0.01, doc="palm centre searched this deep behind the blob's front"),
+    Param("ridge_px", 1.0, unit="px", low=0, doc="distance-transform ridge width averaged into the palm centre"),
+    Param("hand_radius_m", 0.1, unit="m", low=0.03, doc="points this close to the palm centre are the hand"),
+    Param("palm_faces_camera", True, doc="the palm faces the camera (z, out of the back of the hand, points away)"),
+    Param("hand_type", "right", choices=("right", "left", "by_position"),
+          doc="hand_type of the primary hand: fixed, or by its side of the camera (+y: right)"),
+    Param("max_hands", 2, low=1, high=2, doc="hands reported; 2 lets the gesture clutch see a second hand"),
+    Param("open_extent_m", 0.115, unit="m", low=0, low_open=True, doc="fingertip reach beyond the palm centre, open hand"),
+    Param("fist_extent_m", 0.065, unit="m", low=0, low_open=True, doc="the same reach with a fist"),
+    Param("jump_m", 0.15, unit="m", low=0, low_open=True, doc="a palm moving further between frames is a new hand id"),
+])
+
+# Optical axes (x right, y down, z forward) to REP 103 body axes (x forward, y left, z up).
+OPTICAL_TO_BODY = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+
+
+@dataclass
+class DepthHand:
+    """One tracking result: the primary hand (REP 103 camera frame) and what else was seen."""
+
+    position: np.ndarray                 # seen palm surface (m)
+    orientation: np.ndarray              # unit quaternion (x, y, z, w)
+    hand_types: Tuple[str, ...]          # one per hand seen, primary first
+    hand_id: int
+    grab_strength: float
+    pixel: Tuple[float, float]           # palm centre (u, v) in the image
+    palm_radius_m: float                 # distance-transform maximum at the palm's depth
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def hands_num(self) -> int:
+        """Number of hands seen."""
+        return len(self.hand_types)
+
+
+class DepthHandTracker:
+    """Stateful tracker (hand id, axis sign) over successive depth images; see the module."""
+
+    def __init__(self, config: dict):
+        self.config = dict(TRACKER_PARAMS.defaults(), **{k: v for k, v in config.items() if k in TRACKER_PARAMS.params})
+        c = self.config
+        if c["min_depth_m"] >= c["max_depth_m"] or c["min_blob_area_m2"] >= c["max_blob_area_m2"] \
+                or c["fist_extent_m"] >= c["open_extent_m"]:
+            from .errors import MotionSensorError
+            raise MotionSensorError("depth hand: need min_depth_m < max_depth_m, min_blob_area_m2 < "
+                                    "max_blob_area_m2 and fist_extent_m < open_extent_m")
+        self._ray_cache = None
+        self._last_axis = None           # fingers direction (optical) of the previous frame
+        self._last_position = None
+        self._hand_id = 0
+        self.last_reason = ""
+
+    def reset(self) -> None:
+        """Forget the previous hand (a new stream)."""
+        self._last_axis = None
+        self._last_position = None
+
+    def _rays(self, intr: Intrinsics):
+        key = (intr.fx, intr.fy, intr.cx, intr.cy, intr.width, intr.height)
+        if self._ray_cache is None or self._ray_cache[0] != key:
+            xs = (np.arange(intr.width, dtype=np.float32) - intr.cx) / intr.fx
+            ys = (np.arange(intr.height, dtype=np.float32) - intr.cy) / intr.fy
+            self._ray_cache = (key, xs, ys)
+        return self._ray_cache[1], self._ray_cache[2]
+
+    def track(self, depth: np.ndarray, intr: Intrinsics) -> Optional[DepthHand]:
+        """The hand in ``depth`` (m, 0 = none, shape (height, width) of ``intr``), or None
+        when there is none (``last_reason`` says why)."""
+        c = self.config
+        xs, ys = self._rays(intr)
+        found = self._blobs(depth, intr, xs, ys)
+        if not found:
+            self._lost()
+            return None
+        labels, stats, candidates = found
+        primary = candidates[0]
+        hand = self._measure(depth, labels, stats, primary[0], intr, xs, ys)
+        if hand is None:
+            self._lost()
+            return None
+        types = [self._hand_type(hand[0])]
+        if c["max_hands"] > 1 and len(candidates) > 1:
+            other = candidates[1]
+            types.append("left" if types[0] == "right" else "right")
+            if c["hand_type"] == "by_position":
+                types[1] = "right" if -other[2] > 0 else "left"
+        position_opt, rotation_opt, grab, pixel, radius_m = hand
+        if self._last_position is None or np.linalg.norm(position_opt - self._last_position) > c["jump_m"]:
+            self._hand_id += 1
+        self._last_position = position_opt
+        position = OPTICAL_TO_BODY @ position_opt
+        rotation = OPTICAL_TO_BODY @ rotation_opt
+        quaternion = Rotation.from_matrix(rotation).as_quat()
+        self.last_reason = ""
+        return DepthHand(position=position, orientation=quaternion, hand_types=tuple(types), hand_id=self._hand_id,
+                         grab_strength=grab, pixel=pixel, palm_radius_m=radius_m)
+
+    def _lost(self):
+        self._last_position = None
+
+    def _hand_type(self, position_opt) -> str:
+        mode = self.config["hand_type"]
+        if mode != "by_position":
+            return mode
+        return "right" if position_opt[0] < 0 else "left"   # optical x < 0 is the camera's left (+y)
+
+    def _blobs(self, depth, intr, xs, ys):
+        """(labels, stats, [(label, mean depth, mean optical x)] nearest first) or None."""
+        c = self.config
+        lateral = c["max_lateral_m"]
+        inside = (depth > c["min_depth_m"]) & (depth < c["max_depth_m"])
+        # Lateral limits at the far end of the volume bound the columns and rows searched.
+        u0 = max(0, int(np.floor(intr.cx - lateral * intr.fx / c["min_depth_m"])))
+        u1 = min(intr.width, int(np.ceil(intr.cx + lateral * intr.fx / c["min_depth_m"])) + 1)
+        sample = depth[::4, ::4][inside[::4, ::4]]
+        if sample.size < 4:
+            self.last_reason = "nothing in the working volume"
+            return None
+        near = float(np.partition(sample, 3)[3])     # the 4th nearest: one flying pixel is not the front
+        mask = inside & (depth < near + c["band_depth_m"])
+        mask[:, :u0] = False
+        mask[:, u1:] = False
+        count, labels, stats, _ = cv2.connectedComponentsWithStats(mask.view(np.uint8), connectivity=8)
+        if count <= 1:
+            self.last_reason = "nothing in the working volume"
+            return None
+        pixels = stats[1:, cv2.CC_STAT_AREA].astype(float)
+        # Cheap prefilter: a hand at the volume's far end covers at least this many pixels.
+        smallest = c["min_blob_area_m2"] * intr.fx * intr.fy / c["max_depth_m"] ** 2
+        keep = np.nonzero(pixels >= smallest)[0] + 1
+        if keep.size == 0:
+            self.last_reason = "only blobs smaller than a hand"
+            return None
+        candidates, too_big = [], 0
+        for label in keep:
+            # Per-blob sums inside its bounding box: a few blobs, not the whole image.
+            left, top = stats[label, cv2.CC_STAT_LEFT], stats[label, cv2.CC_STAT_TOP]
+            box = (slice(top, top + stats[label, cv2.CC_STAT_HEIGHT]),
+                   slice(left, left + stats[label, cv2.CC_STAT_WIDTH]))
+            rows, cols = np.nonzero(labels[box] == label)
+            z = depth[box][rows, cols]
+            area = float(z @ z) / (intr.fx * intr.fy)   # each pixel covers (z/fx)(z/fy) m^2
+            mean_z = float(z.mean())
+            x = float(xs[cols + left] @ z) / z.size
+            y = float(ys[rows + top] @ z) / z.size
+            if abs(x) > lateral or abs(y) > lateral:
+                continue
+            if area > c["max_blob_area_m2"]:
+                too_big += 1
+            elif area >= c["min_blob_area_m2"]:
+                candidates.append((int(label), mean_z, x))
+        if not candidates:
+            self.last_reason = ("the nearest blob is larger than a hand (the body or furniture?)" if too_big
+                                else "only blobs smaller than a hand")
+            return None
+        candidates.sort(key=lambda item: item[1])
+        return labels, stats, candidates
+
+    def _measure(self, depth, labels, stats, label, intr, xs, ys):
+        """(palm surface, optical rotation, grab, pixel, palm radius) of one blob, or None."""
+        c = self.config
+        left, top = stats[label, cv2.CC_STAT_LEFT], stats[label, cv2.CC_STAT_TOP]
+        width, height = stats[label, cv2.CC_STAT_WIDTH], stats[label, cv2.CC_STAT_HEIGHT]
+        # One pixel of border so the distance transform sees the blob's edge at the crop's edge.
+        t0, l0 = max(top - 1, 0), max(left - 1, 0)
+        t1, l1 = min(top + height + 1, intr.height), min(left + width + 1, intr.width)
+        blob = labels[t0:t1, l0:l1] == label
+        z = np.where(blob, depth[t0:t1, l0:l1], 0.0)
+        front = float(z[blob].min())
+        dist = cv2.distanceTransform(blob.view(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        search = np.where(blob & (z < front + c["palm_search_depth_m"]), dist, 0.0)
+        peak = float(search.max())
+        if peak < 1.0:
+            self.last_reason = "blob too thin for a palm"
+            return None
+        ridge_v, ridge_u = np.nonzero(search >= peak - c["ridge_px"])
+        u = float(ridge_u.mean()) + l0
+        v = float(ridge_v.mean()) + t0
+        # Depth of the palm surface: median over a disc of half the inscribed radius.
+        r = max(1, int(peak * 0.5))
+        vi, ui = int(round(v)) - t0, int(round(u)) - l0
+        patch = z[max(vi - r, 0):vi + r + 1, max(ui - r, 0):ui + r + 1]
+        patch = patch[patch > 0]
+        if patch.size == 0:
+            self.last_reason = "no depth at the palm centre"
+            return None
+        zc = float(np.median(patch))
+        centre = np.array([(u - intr.cx) / intr.fx * zc, (v - intr.cy) / intr.fy * zc, zc])
+        # 3-D points of the blob (every second pixel is plenty for the axes).
+        sub = blob[::2, ::2]
+        zz = z[::2, ::2][sub]
+        rows, cols = np.nonzero(sub)
+        pts = np.column_stack((xs[l0:l1:2][cols] * zz, ys[t0:t1:2][rows] * zz, zz))
+        offsets = pts - centre
+        dist3 = np.einsum("ij,ij->i", offsets, offsets)
+        palm_r = peak * zc / intr.fx
+        palm = offsets[dist3 <= (0.6 * palm_r) ** 2]   # the palm's middle: clear of the thicker wrist
+        near = offsets[dist3 <= c["hand_radius_m"] ** 2]
+        if len(palm) < 6 or len(near) < 10:
+            self.last_reason = "too few points for the hand axes"
+            return None
+        normal = np.linalg.eigh(np.cov(palm.T))[1][:, 0]
+        if (normal[2] < 0) == c["palm_faces_camera"]:
+            normal = -normal   # z out of the back of the hand: away from the camera when the palm faces it
+        axis = np.linalg.eigh(np.cov(near.T))[1][:, 2]
+        axis = axis - normal * float(axis @ normal)
+        axis /= np.linalg.norm(axis)
+        far = offsets[dist3 > (1.4 * c["hand_radius_m"]) ** 2]   # beyond the fingertips: the forearm
+        if len(far) >= 10:
+            if float(far.mean(axis=0) @ axis) > 0:   # the forearm is behind the fingers
+                axis = -axis
+        elif self._last_axis is not None:
+            if float(axis @ self._last_axis) < 0:
+                axis = -axis
+        elif axis[1] > 0:   # no forearm, no history: fingers up in the image
+            axis = -axis
+        self._last_axis = axis
+        rotation = np.column_stack((axis, np.cross(normal, axis), normal))
+        reach = float((offsets @ axis).max())
+        grab = float(np.clip((c["open_extent_m"] - reach) / (c["open_extent_m"] - c["fist_extent_m"]), 0.0, 1.0))
+        return centre, rotation, grab, (u, v), palm_r
