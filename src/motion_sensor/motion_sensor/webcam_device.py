@@ -70,8 +70,8 @@ class WebcamHandDevice(HandDevice):
         Param("static_image_mode", False, doc="detect on every frame instead of tracking (several times slower)"),
         Param("black_level", 12.0, low=0, high=255, doc="mean grey (0-255) below which a frame is black"),
         Param("saturated_fraction", 0.8, low=0, high=1, doc="fraction of white pixels above which a frame is saturated"),
-        Param("curl_open_deg", 60.0, unit="deg", low=0, high=180, doc="finger curl (sum of its joint bends) counted as open (grab 0)"),
-        Param("curl_fist_deg", 230.0, unit="deg", low=0, high=180, doc="finger curl counted as closed (grab 1)"),
+        Param("curl_open_deg", 60.0, unit="deg", low=0, high=270, doc="finger curl (sum of its joint bends) counted as open (grab 0)"),
+        Param("curl_fist_deg", 230.0, unit="deg", low=0, high=270, doc="finger curl counted as closed (grab 1)"),
         Param("pinch_touch_m", 0.02, unit="m", low=0, doc="thumb-finger tip distance counted as touching (pinch 1)"),
         Param("pinch_open_m", 0.07, unit="m", low=0, low_open=True, doc="thumb-finger tip distance counted as apart (pinch 0)"),
     ])
