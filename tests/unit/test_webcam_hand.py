@@ -253,7 +253,7 @@ def webcam_device(tmp_path, frames, detections, **overrides):
 def test_video_plays_each_frame_once_at_its_time_then_ends(tmp_path):
     hand = place(local_hand(), facing_camera(), [0, 0, 0.5])
     frames = [grey_frame()] * 3 + [None] + [grey_frame()] * 2
-    device, clock, capture = webcam_device(tmp_path, frames, [[hand]] * 5)
+    device, clock, capture = webcam_device(tmp_path, frames, [[]] + [[hand]] * 5)  # [] for the warm-up
     published = []
     runner = DeviceRunner(device, published.append, stopped=lambda: False)
     assert runner.run() is True                    # EndOfStream: finished

@@ -14,6 +14,8 @@ decode but show nothing usable (black, saturated, no hand) go out as hands_num 0
 import os
 from typing import Callable, Optional
 
+import numpy as np
+
 from motion_common.params import Param, ParamSchema
 
 from .device import HandDevice
@@ -126,6 +128,9 @@ class WebcamHandDevice(HandDevice):
 
         if self.tracker.detector is None:  # built once, kept across reconnects (loading takes ~0.5 s)
             self.tracker.detector = self._detector_factory(self.config)
+            # The first inference initialises the graph (~0.5 s): do it now, so that the
+            # first real frame is not late (the sequencer would drop it as stale).
+            self.tracker.detector.detect(np.zeros((480, 640, 3), np.uint8))
         video = self.config["video"]
         capture = self._new_capture(video if video else self.config["camera"])
         if not capture.isOpened():
