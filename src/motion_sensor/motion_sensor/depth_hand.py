@@ -30,7 +30,7 @@ Positions and orientations come out in the camera's REP 103 body frame (x forwar
 the optical axis, y left, z up), as hand.msg wants; the hand frame is hand.msg's (x along
 the fingers, z out of the back of the hand).
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Optional, Tuple
 
 import cv2
@@ -40,6 +40,7 @@ from scipy.spatial.transform import Rotation
 from motion_common.params import Param, ParamSchema
 
 from .depth_image import Intrinsics
+from .errors import MotionSensorError
 
 TRACKER_PARAMS = ParamSchema([
     Param("min_depth_m", 0.35, unit="m", low=0.05, doc="working volume: nearest depth along the optical axis"),
@@ -76,7 +77,6 @@ class DepthHand:
     grab_strength: float
     pixel: Tuple[float, float]           # palm centre (u, v) in the image
     palm_radius_m: float                 # distance-transform maximum at the palm's depth
-    extra: dict = field(default_factory=dict)
 
     @property
     def hands_num(self) -> int:
@@ -92,7 +92,6 @@ class DepthHandTracker:
         c = self.config
         if c["min_depth_m"] >= c["max_depth_m"] or c["min_blob_area_m2"] >= c["max_blob_area_m2"] \
                 or c["fist_extent_m"] >= c["open_extent_m"]:
-            from .errors import MotionSensorError
             raise MotionSensorError("depth hand: need min_depth_m < max_depth_m, min_blob_area_m2 < "
                                     "max_blob_area_m2 and fist_extent_m < open_extent_m")
         self._ray_cache = None
