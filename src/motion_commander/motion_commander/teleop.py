@@ -34,6 +34,7 @@ class TeleopMapper:
         self.follow_orientation = follow_orientation
         self._hand_ref = None
         self._tool_ref = None
+        self._last_hand = None  # hand position of the last target(): the anchor of a live ratio change
 
     @property
     def engaged(self) -> bool:
@@ -44,11 +45,31 @@ class TeleopMapper:
         """Take the current hand and tool poses as the reference of relative motion."""
         self._hand_ref = (np.array(hand_position, dtype=float), quat_to_matrix(hand_orientation))
         self._tool_ref = (np.array(tool_position, dtype=float), quat_to_matrix(tool_orientation))
+        self._last_hand = self._hand_ref[0]
 
     def disengage(self) -> None:
         """Drop the reference; target() is unavailable until the next engage()."""
         self._hand_ref = None
         self._tool_ref = None
+        self._last_hand = None
+
+    def set_speed_ratio(self, speed_ratio: float) -> None:
+        """Change the ratio live (e.g. from the dashboard) without moving the tool.
+
+        While engaged, the references are re-anchored at the last hand position seen: the
+        tool reference moves to the target of that hand position under the old ratio, so the
+        target there is unchanged and only motion from now on is scaled by the new ratio.
+        Orientation does not depend on the ratio, so its references stay.
+        """
+        if not (np.isfinite(speed_ratio) and speed_ratio > 0):
+            raise MotionCommanderError(f"speed_ratio must be a finite number > 0, got {speed_ratio!r}")
+        if self.engaged and self._last_hand is not None:
+            hand_p0, hand_r0 = self._hand_ref
+            tool_p0, tool_r0 = self._tool_ref
+            anchor = self._last_hand.copy()
+            self._tool_ref = (tool_p0 + self.speed_ratio * (self.hand_to_robot @ (anchor - hand_p0)), tool_r0)
+            self._hand_ref = (anchor, hand_r0)
+        self.speed_ratio = float(speed_ratio)
 
     def target(self, hand_position, hand_orientation):
         """Tool target (position, quaternion x, y, z, w) for the given hand pose."""
@@ -56,7 +77,8 @@ class TeleopMapper:
             raise MotionCommanderError("teleop is not engaged; call engage() first")
         hand_p0, hand_r0 = self._hand_ref
         tool_p0, tool_r0 = self._tool_ref
-        displacement = self.hand_to_robot @ (np.asarray(hand_position, dtype=float) - hand_p0)
+        self._last_hand = np.asarray(hand_position, dtype=float)
+        displacement = self.hand_to_robot @ (self._last_hand - hand_p0)
         position = tool_p0 + self.speed_ratio * displacement
         if not self.follow_orientation:
             return position, matrix_to_quat(tool_r0)

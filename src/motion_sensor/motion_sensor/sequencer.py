@@ -98,6 +98,15 @@ SEQUENCER_PARAMS = ParamSchema([
 ])
 
 
+def filter_params_for(params: dict, name: str) -> dict:
+    """The parameters of filter ``name`` from validated SEQUENCER_PARAMS values (its
+    ``filter_params`` entry; ``queue_size`` overrides the mean filter's window)."""
+    filter_params = dict((params["filter_params"] or {}).get(name) or {})
+    if name == "mean" and params["queue_size"] is not None:
+        filter_params["queue_size"] = params["queue_size"]
+    return filter_params
+
+
 def sequencer_setup(params: dict, source: str):
     """(SequencerConfig, inputs) of validated SEQUENCER_PARAMS values; raises ParameterError
     (inputs entries) or MotionSensorError (values the stages refuse)."""
@@ -107,9 +116,7 @@ def sequencer_setup(params: dict, source: str):
     else:
         inputs = [INPUT_PARAMS.validate(entry, f"{source}: 'inputs'[{i}]") for i, entry in enumerate(inputs)]
     name = params["filter"]
-    filter_params = dict((params["filter_params"] or {}).get(name) or {})
-    if name == "mean" and params["queue_size"] is not None:
-        filter_params["queue_size"] = params["queue_size"]
+    filter_params = filter_params_for(params, name)
     keys = ("max_age_s", "max_future_s", "entry_trim_frames", "exit_trim_frames", "hand_lost_s", "jump_distance_m",
             "jump_angle_rad", "jump_window_s", "jump_accept_after", "device_timeout_s", "active_device")
     config = SequencerConfig(filter_name=name, filter_params=filter_params,
@@ -220,6 +227,18 @@ class Sequencer:
         self._delay.clear()
         self._last_accepted = None
         self._jump_candidates = []
+
+    def set_filter(self, name: str, params: Optional[dict] = None) -> None:
+        """Switch the pose filter live (e.g. from the dashboard) without an output jump.
+
+        The new filter starts empty; the continuity offset (as for a device switch) keeps
+        the output where the old filter left it, so the tool does not move. Raises
+        MotionSensorError for an unknown filter or bad parameters (the old one stays).
+        """
+        self.filter = make_filter(name, **(params or {}))
+        self.config.filter_name, self.config.filter_params = name, dict(params or {})
+        self._continuity_pending = self._last_output is not None
+        self.counters["filter_switches"] += 1
 
     @property
     def active_device(self) -> Optional[str]:
