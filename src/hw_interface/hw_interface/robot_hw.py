@@ -6,6 +6,7 @@ Poses are (position [m], quaternion x, y, z, w) of the tool in the robot base fr
 joints are radians in the driver's ``joint_names`` order.
 """
 import abc
+import time
 from dataclasses import dataclass
 from typing import List, Sequence, Tuple
 
@@ -63,6 +64,14 @@ class RobotDriver(abc.ABC):
     @abc.abstractmethod
     def get_robot_cartesian_position(self) -> Tuple[np.ndarray, np.ndarray]:
         """GetRobotCartesianPosition: measured tool pose."""
+
+    def joint_sample(self) -> Tuple[float, np.ndarray]:
+        """(wall-clock time in s, measured joints) of one and the same sample: what
+        /joint_states publishes, so that speeds computed from its stamps are true speeds.
+        This default stamps the read; a driver that knows when its controller sampled the
+        joints (a physics step, an RTDE packet) overrides it."""
+        joints = self.get_robot_joints()
+        return time.time(), joints
 
     @abc.abstractmethod
     def set_joints(self, joints: Sequence[float]) -> None:

@@ -15,6 +15,7 @@ from motion_common.params import Param, ParamSchema
 from .errors import HwInterfaceError
 from .protocol import Result
 from .robot_hw import DriverStatus, RobotDriver, SimulatedScene, UrdfModelMixin
+from .stream_follower import StreamFollower
 from .trajectory import JointPath, joint_move_duration, trapezoid_duration
 
 
@@ -71,6 +72,10 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
     path's end to get there; otherwise the move fails, never a silent SUCCESS).
 
     stop() from another thread cuts a blocking move short: it answers INTERRUPTED.
+
+    Streamed targets (SetJoints) are followed within the URDF joint velocity limits
+    (StreamFollower, in simulated time), however fast they arrive; joint_sample() is stamped
+    with the scheduled wall-clock time of the physics step that produced it.
     """
 
     name = "pybullet"
@@ -124,6 +129,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._joint_indices = []
         self._tool_link = -1
         self._target = self._initial.copy()
+        self._follower = StreamFollower(self.kinematics.velocity_limits, self._initial)
+        # Wall-clock time (s) of the state after the last physics step, see joint_sample().
+        self._step_stamp = time.time()
         self._path: Optional[JointPath] = None
         self._path_start = 0.0
         self._path_done = threading.Event()
@@ -166,9 +174,11 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                                    Result.LOGIN_FAILED)
         self._joint_indices = [by_name[n] for n in self.joint_names]
         self._efforts = np.array([self._client.getJointInfo(self._body, i)[10] for i in self._joint_indices])
+        self._max_speeds = self.kinematics.velocity_limits.tolist()
         for index, value in zip(self._joint_indices, self._initial):
             self._client.resetJointState(self._body, index, float(value))
         self._target = self._initial.copy()
+        self._follower.reset(self._initial)
         self.bodies = load_scene(self._client, self.scene_spec)
         self._running.set()
         self._thread = threading.Thread(target=self._step_loop, name="pybullet-step", daemon=True)
@@ -195,6 +205,14 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             self._require_connection()
             states = self._client.getJointStates(self._body, self._joint_indices)
         return np.array([s[0] for s in states])
+
+    def joint_sample(self):
+        """(wall-clock time of the physics step the joints come from, measured joints)."""
+        with self._lock:
+            self._require_connection()
+            states = self._client.getJointStates(self._body, self._joint_indices)
+            stamp = self._step_stamp
+        return stamp, np.array([s[0] for s in states])
 
     def get_joint_velocities(self) -> np.ndarray:
         """Measured joint velocities (rad/s)."""
@@ -226,7 +244,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             self._require_connection()
             if self._path is not None:
                 raise HwInterfaceError("a MoveJ/MoveL is running; STOP it before streaming", Result.BUSY)
-            self._target = target
+            self._follower.set_goal(target)
 
     def move_j(self, joints, timeout: float = 30.0) -> None:
         goal = np.asarray(joints, dtype=float)
@@ -255,6 +273,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 return
             states = self._client.getJointStates(self._body, self._joint_indices)
             self._target = np.array([s[0] for s in states])
+            self._follower.reset(self._target)
             if self._path is not None:
                 self._end_path((Result.INTERRUPTED, f"motion interrupted by {reason}; the robot stopped "
                                                     "short of the goal"))
@@ -348,6 +367,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             for joint, value in zip(self._joint_indices, self._initial):
                 self._client.resetJointState(self._body, joint, float(value))
             self._target = self._initial.copy()
+            self._follower.reset(self._target)
 
     # -- internals -------------------------------------------------------------------------
     def _current_command(self) -> np.ndarray:
@@ -355,6 +375,8 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             self._require_connection()
             if self._path is not None:
                 raise HwInterfaceError("another MoveJ/MoveL is running; wait or STOP it", Result.BUSY)
+            # A move starts where the servo is, and the stream it cuts off ends there.
+            self._follower.reset(self._target)
             return self._target.copy()
 
     def _goal_error(self) -> float:
@@ -379,13 +401,18 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
 
     def _step_loop(self) -> None:
         next_tick = time.perf_counter()
+        # perf_counter (monotonic) to wall clock: stamps are wall-clock like ROS's.
+        to_wall = time.time() - next_tick
         while self._running.is_set():
             with self._lock:
                 if self._client is None:
                     break
-                if self._path is not None:
+                if self._path is None:
+                    self._target = self._follower.step(self.time_step)
+                else:
                     elapsed = self._sim_time - self._path_start
                     self._target = self._path.sample(elapsed)
+                    self._follower.reset(self._target)  # a stream after the move starts here
                     if elapsed >= self._path.duration:
                         error = self._goal_error()
                         if error <= self.goal_tolerance:
@@ -393,17 +420,28 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                         elif elapsed - self._path.duration > self.settle_timeout:
                             self._target = np.array([s[0] for s in self._client.getJointStates(
                                 self._body, self._joint_indices)])
+                            self._follower.reset(self._target)
                             self._end_path((Result.DRIVER_FAULT, (
                                 f"the arm did not settle within {self.settle_timeout:g} s of the path's end: "
                                 f"{error:.4f} rad from the goal (tolerance {self.goal_tolerance:g} rad); "
                                 "stopped there (blocked, or a joint limit/effort too low?)")))
-                self._client.setJointMotorControlArray(
-                    self._body, self._joint_indices, pybullet.POSITION_CONTROL,
-                    targetPositions=self._target.tolist(), forces=(self._efforts * 4.0).tolist(),
-                    positionGains=[getattr(self, "_gain", 0.6)] * len(self._joint_indices))
+                # One call per joint: only setJointMotorControl2 takes maxVelocity, which
+                # keeps the motor itself within the URDF limit (a servo lagging under
+                # gravity would otherwise catch up faster than the limit).
+                gain = getattr(self, "_gain", 0.6)
+                forces = (self._efforts * 4.0).tolist()
+                for joint, target, force, speed in zip(self._joint_indices, self._target.tolist(), forces,
+                                                       self._max_speeds):
+                    self._client.setJointMotorControl2(self._body, joint, pybullet.POSITION_CONTROL,
+                                                       targetPosition=target, force=force, positionGain=gain,
+                                                       maxVelocity=speed)
                 self._client.stepSimulation()
                 self._sim_time += self.time_step
                 self.steps += 1
+                # The state now is the one scheduled for the end of this step: stamping it
+                # with that time (not with when someone reads it) keeps stamp differences
+                # equal to simulated time, also while the loop catches up after a delay.
+                self._step_stamp = (next_tick + self.time_step + to_wall) if self.real_time else time.time()
             if not self.real_time:
                 # Yield the GIL and the lock so callers are not starved by a flat-out loop.
                 time.sleep(0)
@@ -416,3 +454,4 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 # Far behind (machine busy): count it and resynchronise instead of racing.
                 self.overruns += 1
                 next_tick = time.perf_counter()
+                to_wall = time.time() - next_tick
