@@ -8,7 +8,8 @@ import pytest
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 # The pure-Python packages import straight from the source tree, so the unit tests need
 # neither a built workspace nor ROS environment variables.
-for package in ("motion_common", "motion_sensor", "motion_commander", "hw_interface", "motion_apps", "kitting"):
+for package in ("motion_common", "motion_sensor", "motion_commander", "hw_interface", "motion_apps", "kitting",
+                "dashboard"):
     path = os.path.join(ROOT, "src", package)
     if path not in sys.path:
         sys.path.insert(0, path)

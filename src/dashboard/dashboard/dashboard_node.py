@@ -1,0 +1,255 @@
+"""The dashboard's ROS edge: subscribers feed DashboardState, actions call the core's and
+the server's services, and the NiceGUI server runs in the same process.
+
+rospy is initialised with disable_signals=True: uvicorn owns SIGINT (roslaunch's shutdown),
+stops serving, and then this node shuts rospy down and ends its child jobs. A rospy
+shutdown from elsewhere (rosnode kill) stops the web server in turn.
+"""
+import json
+import os
+import threading
+
+import numpy as np
+import rospy
+import rosservice
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Bool, Float64, String, UInt8
+from std_srvs.srv import SetBool
+
+from motion_commander.config import TELEOP_PARAMETERS
+from motion_commander.msg import StageLatency
+from motion_common.errors import ParameterError
+from motion_common.ros_params import load_private_params
+from motion_sensor.msg import Gesture, hand
+
+from . import programs as program_files
+from .access import check_access_config
+from .config import DASHBOARD_PARAMETERS
+from .jobs import Job, campaign_command, run_program_command
+from .readings import driver_status, sequencer_counters, tool_reading
+from .state import DashboardState
+
+LATCH_SERVICE = "/motion_controller/latch_stop"
+SPAWN_SERVICE = "/kitting_cell_sim/spawn"
+
+
+class DashboardNode:
+    """Subscriptions into the state, and the actions the page's controls call."""
+
+    def __init__(self, params):
+        self.params = params
+        self.state = DashboardState(path_points=params["path_points"], path_interval_s=params["path_interval_s"],
+                                    latency_window=params["latency_window"])
+        self.jobs_lock = threading.Lock()
+        self._jobs = {"program": None, "campaign": None}
+        self.fallback_estop = False
+        self.programs_dir = os.path.abspath(params["programs_dir"])
+        self.output_dir = os.path.abspath(params["output_dir"])
+        self.engage_pub = rospy.Publisher("/motion_commander/engage", Bool, queue_size=1)
+        self.estop_pub = rospy.Publisher("/motion_commander/estop", Bool, queue_size=1)
+        self.ratio_pub = rospy.Publisher("/motion_commander/set_speed_ratio", Float64, queue_size=1)
+        self.filter_pub = rospy.Publisher("/motion_sensor/set_filter", String, queue_size=1)
+        self.campaign_stop_pub = rospy.Publisher("/kitting_trials/stop", Bool, queue_size=1)
+        self.latch = rospy.ServiceProxy(LATCH_SERVICE, SetBool)
+        s = self.state
+        subscribe = rospy.Subscriber
+        subscribe("/motion_commander/status", UInt8, lambda m: s.set("status", int(m.data)), queue_size=10)
+        subscribe("/motion_controller/stop_latched", Bool, lambda m: s.set("stop_latched", bool(m.data)), queue_size=5)
+        subscribe("/motion_commander/speed_ratio", Float64, lambda m: s.set("speed_ratio", float(m.data)), queue_size=5)
+        subscribe("/motion_sensor/filter", String, lambda m: s.set("filter", m.data), queue_size=5)
+        subscribe("/motion_sensor/active_device", String, lambda m: s.set("device", m.data), queue_size=5)
+        subscribe("/motion_sensor/raw_hand", hand, self.on_hand, queue_size=1)
+        subscribe("/motion_sensor/gesture", Gesture, self.on_gesture, queue_size=10)
+        subscribe("/teach/feedback", String, lambda m: s.set("teach_feedback", m.data), queue_size=10)
+        subscribe("/motion_commander/latency", StageLatency, lambda m: s.add_latency(m.driver), queue_size=100)
+        subscribe("/joint_states", JointState, self.on_joints, queue_size=1)
+        subscribe("/motion_controller/tool_pose", PoseStamped, self.on_tool, queue_size=1)
+        subscribe("/motion_commander/target", PoseStamped, self.on_target, queue_size=10)
+        subscribe("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=10)
+        subscribe("/motion_controller/status", DiagnosticStatus, self.on_driver, queue_size=5)
+        subscribe("/kitting_trials/progress", String, lambda m: self.on_campaign("campaign_progress", m), queue_size=5)
+        subscribe("/kitting_trials/result", String, lambda m: self.on_campaign("campaign_result", m), queue_size=5)
+        self.poll(None)
+        self.poll_timer = rospy.Timer(rospy.Duration(1.0), self.poll)
+
+    # -- inputs ----------------------------------------------------------------------------
+    def on_hand(self, msg):
+        self.state.set("hands", {"num": int(msg.hands_num), "types": list(msg.hand_type)})
+
+    def on_gesture(self, msg):
+        self.state.set("gesture", {"name": msg.name, "confidence": float(msg.confidence)})
+
+    def on_joints(self, msg):
+        self.state.set("joints", [float(np.degrees(v)) for v in msg.position])
+
+    def on_tool(self, msg):
+        p, o = msg.pose.position, msg.pose.orientation
+        self.state.set("tool", tool_reading((p.x, p.y, p.z), (o.x, o.y, o.z, o.w)))
+        self.state.add_path_point("tool", msg.header.stamp.to_sec(), (p.x, p.y, p.z))
+
+    def on_target(self, msg):
+        p = msg.pose.position
+        self.state.add_path_point("hand", msg.header.stamp.to_sec(), (p.x, p.y, p.z))
+
+    def on_diagnostics(self, msg):
+        for status in msg.status:
+            if status.hardware_id == "sequencer":
+                self.state.set("sequencer", sequencer_counters((kv.key, kv.value) for kv in status.values))
+
+    def on_driver(self, msg):
+        self.state.set("driver", driver_status([(kv.key, kv.value) for kv in msg.values], msg.message, msg.level))
+
+    def on_campaign(self, key, msg):
+        try:
+            self.state.set(key, json.loads(msg.data))
+        except ValueError as exc:
+            rospy.logwarn_throttle(10.0, "dashboard: unreadable %s ignored: %s", key, exc)
+
+    def poll(self, _event):
+        """Once a second: which services exist, and the core's engage mode."""
+        self.state.update(server_up=_service_exists(LATCH_SERVICE), kitting_cell=_service_exists(SPAWN_SERVICE))
+        mode = self.params["engage_mode"] or rospy.get_param("/motion_commander/engage", "")
+        self.state.set("engage_mode", mode)
+
+    # -- actions (called by the page, off its event loop) ----------------------------------------
+    def stop(self) -> str:
+        """Latch the server's stop: teleop, programs and the kitting cell all halt."""
+        try:
+            answer = self.latch(True)
+            if answer.success:
+                return "STOP latched: " + answer.message
+            return "STOP refused by the server: " + answer.message
+        except (rospy.ServiceException, rospy.ROSException) as exc:
+            # No server to latch: at least halt teleop through the core's own e-stop.
+            self.fallback_estop = True
+            self.estop_pub.publish(Bool(True))
+            return f"robot server unreachable ({exc}): teleop e-stop sent instead"
+
+    def release(self) -> str:
+        """Release the latched stop (teleop needs a fresh engage afterwards)."""
+        if self.fallback_estop:
+            self.estop_pub.publish(Bool(False))
+            self.fallback_estop = False
+        try:
+            answer = self.latch(False)
+            return ("released: " if answer.success else "release refused: ") + answer.message
+        except (rospy.ServiceException, rospy.ROSException) as exc:
+            return f"release failed: robot server unreachable ({exc})"
+
+    def engage(self, on: bool) -> str:
+        """The button clutch (engage:=button)."""
+        self.engage_pub.publish(Bool(bool(on)))
+        return "engage requested" if on else "disengage requested"
+
+    def set_speed_ratio(self, ratio) -> str:
+        """Ask the core for a new ratio; /motion_commander/speed_ratio confirms it."""
+        try:
+            TELEOP_PARAMETERS.params["speed_ratio"].check(float(ratio), "speed ratio")
+        except (ParameterError, TypeError, ValueError) as exc:
+            return f"refused: {exc}"
+        self.ratio_pub.publish(Float64(float(ratio)))
+        return f"speed ratio {float(ratio):.2f} requested"
+
+    def set_filter(self, name: str) -> str:
+        """Ask the sequencer to switch filter; /motion_sensor/filter confirms it."""
+        self.filter_pub.publish(String(name))
+        return f"filter {name} requested"
+
+    def programs(self):
+        """The programs folder's listing."""
+        return program_files.list_programs(self.programs_dir)
+
+    def run_program(self, name: str, dry_run: bool) -> str:
+        """Dry-run or replay a program with motion_apps' run_program."""
+        try:
+            path = program_files.program_path(self.programs_dir, name)
+        except ValueError as exc:
+            return str(exc)
+        command = run_program_command(path, dry_run, self.params["scene"])
+        return self._start("program", command, f"{'dry run' if dry_run else 'replay'} of {name} started")
+
+    def delete_program(self, name: str) -> str:
+        """Delete a program file."""
+        return program_files.delete_program(self.programs_dir, name) or f"{name} deleted"
+
+    def start_campaign(self, trials: int, perturb: bool) -> str:
+        """Feed the simulated cell ``trials`` parts (kitting_trials); figures arrive per trial."""
+        self.state.update(campaign_progress=None, campaign_result=None)
+        try:
+            command = campaign_command(trials, 1, perturb, self.output_dir)
+        except ValueError as exc:
+            return str(exc)
+        return self._start("campaign", command, f"campaign of {trials} trials started", self.on_campaign_exit)
+
+    def end_campaign(self) -> str:
+        """Ask the campaign to end after reporting the trials so far."""
+        self.campaign_stop_pub.publish(Bool(True))
+        return "campaign end requested: it reports the trials so far"
+
+    def on_campaign_exit(self, job):
+        if self.state.get("campaign_result") is None:
+            path = os.path.join(self.output_dir, "kitting_summary.json")
+            try:
+                with open(path, encoding="utf-8") as stream:
+                    self.state.set("campaign_result", json.load(stream))
+            except (OSError, ValueError) as exc:
+                self.state.set("campaign_result", {"error": f"campaign exited ({job.exit_code}), no summary: {exc}"})
+
+    def _start(self, kind, command, started, on_exit=None) -> str:
+        with self.jobs_lock:
+            job = self._jobs[kind]
+            if job is not None and job.running:
+                return f"a {kind} job is already running"
+            try:
+                self._jobs[kind] = Job(kind, command, on_exit=on_exit)
+            except OSError as exc:
+                return f"could not start {command[0]}: {exc}"
+        return started
+
+    def jobs(self):
+        """kind -> running."""
+        with self.jobs_lock:
+            return {kind: job is not None and job.running for kind, job in self._jobs.items()}
+
+    def job_lines(self, kind):
+        """The output of the last job of that kind."""
+        with self.jobs_lock:
+            job = self._jobs[kind]
+        return [] if job is None else job.lines()
+
+    def shutdown(self):
+        """End running jobs (SIGINT, as roslaunch would)."""
+        with self.jobs_lock:
+            jobs = [job for job in self._jobs.values() if job is not None]
+        for job in jobs:
+            job.stop(timeout=5.0)
+
+
+def _service_exists(name: str) -> bool:
+    try:
+        return rosservice.get_service_uri(name) is not None
+    except Exception:  # noqa: BLE001 - the master may be gone during shutdown; treat as absent
+        return False
+
+
+def main():
+    """Run the dashboard node until SIGINT or a ROS shutdown."""
+    rospy.init_node("dashboard", disable_signals=True)
+    params = load_private_params(DASHBOARD_PARAMETERS, "dashboard")
+    try:
+        check_access_config(params["host"], params["token"])
+    except ParameterError as exc:
+        rospy.logfatal("dashboard: %s", exc)
+        raise SystemExit(1) from None
+    node = DashboardNode(params)
+    from nicegui import app
+    from .page import serve
+    rospy.on_shutdown(app.shutdown)
+    url = f"http://{params['host']}:{params['port']}/" + ("?token=<token>" if params["token"] else "")
+    try:
+        serve(node.state, node, params, on_started=lambda: rospy.loginfo("dashboard: serving %s", url))
+    finally:
+        node.shutdown()
+        rospy.signal_shutdown("dashboard stopped")

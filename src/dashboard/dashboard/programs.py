@@ -1,0 +1,59 @@
+"""The taught programs in the programs folder: list them, delete one (names only: nothing
+outside the folder can be named)."""
+import os
+from dataclasses import dataclass
+from typing import List, Optional
+
+from motion_commander.program import ProgramError, load_program
+
+
+@dataclass
+class ProgramInfo:
+    """One program file as the page lists it."""
+
+    name: str                 # file name without .yaml
+    path: str
+    modified: float           # s since the epoch
+    robot: str = ""
+    waypoints: int = 0
+    error: str = ""           # why it cannot be read (then it can only be deleted)
+
+
+def list_programs(folder: str) -> List[ProgramInfo]:
+    """Every *.yaml program in ``folder``, newest first; unreadable ones carry their error."""
+    if not os.path.isdir(folder):
+        return []
+    found = []
+    for entry in os.scandir(folder):
+        if not entry.is_file() or not entry.name.endswith(".yaml"):
+            continue
+        info = ProgramInfo(entry.name[:-len(".yaml")], entry.path, entry.stat().st_mtime)
+        try:
+            program = load_program(entry.path)
+            info.robot, info.waypoints = program.robot, len(program.waypoints)
+        except ProgramError as exc:
+            info.error = str(exc)
+        found.append(info)
+    return sorted(found, key=lambda p: (-p.modified, p.name))
+
+
+def program_path(folder: str, name: str) -> str:
+    """The file of program ``name`` in ``folder``; ValueError for anything but a plain name."""
+    if not name or name != os.path.basename(name) or name.startswith(".") or "\0" in name:
+        raise ValueError(f"not a program name: {name!r}")
+    return os.path.join(folder, name + ".yaml")
+
+
+def delete_program(folder: str, name: str) -> Optional[str]:
+    """Remove program ``name``; return None when done, else why not."""
+    try:
+        path = program_path(folder, name)
+    except ValueError as exc:
+        return str(exc)
+    try:
+        os.remove(path)
+    except FileNotFoundError:
+        return f"{name}: no such program in {folder}"
+    except OSError as exc:
+        return f"{name}: {exc.strerror}"
+    return None

@@ -1,0 +1,42 @@
+"""The teleop status as the page shows it: the README status table's name and a colour."""
+from typing import Optional, Tuple
+
+from motion_commander.teleop_core import TeleopStatus
+
+# Green: streaming; amber: streaming but limited; orange: holding for a reason; red: the
+# e-stop; grey: idle. Every TeleopStatus has a colour (tests/unit/test_dashboard_state.py).
+STATUS_COLOURS = {
+    TeleopStatus.WAITING_FOR_ROBOT: "grey",
+    TeleopStatus.DISENGAGED: "grey",
+    TeleopStatus.ENGAGED: "green",
+    TeleopStatus.RAMPING: "green",
+    TeleopStatus.JOINT_SPEED_LIMITED: "amber",
+    TeleopStatus.SINGULARITY_SLOWDOWN: "amber",
+    TeleopStatus.WORKSPACE_LIMIT: "amber",
+    TeleopStatus.JOINT_LIMIT_MARGIN: "amber",
+    TeleopStatus.IK_FAILED: "orange",
+    TeleopStatus.BAD_INPUT: "orange",
+    TeleopStatus.STALE_INPUT_HALT: "orange",
+    TeleopStatus.SINGULARITY_HALT: "orange",
+    TeleopStatus.ESTOP: "red",
+}
+
+# The clutch is closed (the hand steers the tool) in these states.
+ENGAGED_STATUSES = frozenset(STATUS_COLOURS) - {TeleopStatus.WAITING_FOR_ROBOT, TeleopStatus.DISENGAGED,
+                                               TeleopStatus.ESTOP, TeleopStatus.BAD_INPUT}
+
+
+def status_view(code: Optional[int]) -> Tuple[str, str]:
+    """(name, colour) of a /motion_commander/status code; None means not heard yet."""
+    if code is None:
+        return "NO STATUS", "grey"
+    try:
+        status = TeleopStatus(int(code))
+    except ValueError:
+        return f"UNKNOWN ({code})", "grey"
+    return status.name, STATUS_COLOURS[status]
+
+
+def is_engaged(code: Optional[int]) -> bool:
+    """True when the status code means the clutch is closed."""
+    return code is not None and code in {int(s) for s in ENGAGED_STATUSES}

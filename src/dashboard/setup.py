@@ -1,0 +1,5 @@
+"""Python package of the dashboard catkin package (installed by catkin_python_setup)."""
+from setuptools import setup
+from catkin_pkg.python_setup import generate_distutils_setup
+
+setup(**generate_distutils_setup(packages=["dashboard"], package_dir={"": "."}))
