@@ -24,6 +24,10 @@ class SessionData:
     tools: List[tuple] = field(default_factory=list)
     latencies: List[float] = field(default_factory=list)
     stage_latencies: List[tuple] = field(default_factory=list)  # (sequencer, core, driver) s
+    # (sensor stamp, x, y, z) of the hand in the device frame: the sequencer's filtered
+    # output and the device's raw frames, to judge tracking on what the operator did.
+    hands: List[tuple] = field(default_factory=list)
+    raw_hands: List[tuple] = field(default_factory=list)
 
 
 def tracking_errors(targets: np.ndarray, tools: np.ndarray) -> np.ndarray:
@@ -40,6 +44,58 @@ def tracking_errors(targets: np.ndarray, tools: np.ndarray) -> np.ndarray:
     return np.linalg.norm(tools[inside, 1:] - wanted, axis=1)
 
 
+def overshoot(targets: np.ndarray, tools: np.ndarray, prominence: float = 0.005) -> float:
+    """Largest distance (m) the tool goes past an extremum of the commanded target.
+
+    Per base axis, every maximum and minimum of the target with at least ``prominence``
+    (m) is an extremum; the tool overshoots a maximum by how far it rises above the
+    target's value there before the target's next extremum on that axis (a minimum: how
+    far it falls below). The tool is allowed its lag: only going beyond counts. 0 when
+    it never goes past.
+    """
+    from scipy.signal import find_peaks
+
+    if len(targets) < 3 or len(tools) == 0:
+        return 0.0
+    worst = 0.0
+    for axis in (1, 2, 3):
+        values = targets[:, axis]
+        maxima, _ = find_peaks(values, prominence=prominence)
+        minima, _ = find_peaks(-values, prominence=prominence)
+        extrema = sorted([(i, 1.0) for i in maxima] + [(i, -1.0) for i in minima])
+        for k, (index, sign) in enumerate(extrema):
+            start = targets[index, 0]
+            end = targets[extrema[k + 1][0], 0] if k + 1 < len(extrema) else np.inf
+            window = tools[(tools[:, 0] >= start) & (tools[:, 0] < end), axis]
+            if len(window):
+                worst = max(worst, float(np.max(sign * (window - values[index]))))
+    return worst
+
+
+def raw_hand_targets(targets: np.ndarray, hands: np.ndarray, raw_hands: np.ndarray) -> np.ndarray:
+    """The raw (unfiltered) hand path mapped into the target's frame: rows (stamp, x, y, z).
+
+    The teleop mapping is affine in position (reference offset, rotation, speed ratio)
+    while engaged, so it is recovered by least squares from the filtered hand and the
+    target at the same sensor stamps, and applied to the raw frames inside the targets'
+    span. Tracking against this judges filters on what the operator did, not on their
+    own output.
+    """
+    if len(targets) < 4 or len(hands) < 4 or len(raw_hands) == 0:
+        return np.zeros((0, 4))
+    order = np.argsort(hands[:, 0])
+    hands = hands[order]
+    inside = (targets[:, 0] >= hands[0, 0]) & (targets[:, 0] <= hands[-1, 0])
+    t = targets[inside, 0]
+    if len(t) < 4:
+        return np.zeros((0, 4))
+    filtered = np.column_stack([np.interp(t, hands[:, 0], hands[:, a]) for a in (1, 2, 3)] + [np.ones(len(t))])
+    mapping, *_ = np.linalg.lstsq(filtered, targets[inside, 1:], rcond=None)
+    raw = raw_hands[(raw_hands[:, 0] >= targets[0, 0]) & (raw_hands[:, 0] <= targets[-1, 0])]
+    mapped = np.column_stack([raw[:, 1:], np.ones(len(raw))]) @ mapping
+    return np.column_stack([raw[:, 0], mapped])
+
+
 def final_error(targets: np.ndarray, tools: np.ndarray) -> float:
     """Distance (m) between the last target and the last tool sample (settled error)."""
     if len(targets) == 0 or len(tools) == 0:
@@ -52,6 +108,9 @@ def summarize(data: SessionData) -> dict:
     targets = np.asarray(data.targets, dtype=float).reshape(-1, 4)
     tools = np.asarray(data.tools, dtype=float).reshape(-1, 4)
     errors = tracking_errors(targets, tools) * 1000.0
+    raw_targets = raw_hand_targets(targets, np.asarray(data.hands, dtype=float).reshape(-1, 4),
+                                   np.asarray(data.raw_hands, dtype=float).reshape(-1, 4))
+    raw_errors = tracking_errors(raw_targets, tools) * 1000.0
     latencies = np.asarray(data.latencies, dtype=float) * 1000.0
     settled = final_error(targets, tools)
 
@@ -70,6 +129,9 @@ def summarize(data: SessionData) -> dict:
         "tracking_error_p95_mm": pct(errors, 95),
         "tracking_error_max_mm": round(float(errors.max()), 3) if len(errors) else None,
         "final_error_mm": round(settled * 1000.0, 3) if np.isfinite(settled) else None,
+        "overshoot_mm": round(overshoot(targets, tools) * 1000.0, 3),
+        "raw_tracking_error_rms_mm": round(float(np.sqrt(np.mean(raw_errors ** 2))), 3) if len(raw_errors) else None,
+        "raw_tracking_error_p95_mm": pct(raw_errors, 95),
         "latency_p50_ms": pct(latencies, 50),
         "latency_p99_ms": pct(latencies, 99),
         "latency_samples": int(len(latencies)),
@@ -101,6 +163,9 @@ def format_summary(summary: dict, plot_path: str = "") -> str:
         f"hand path (scaled)       : {summary['hand_path_length_mm']} mm",
         f"tracking error rms / p95 / max : {show(summary['tracking_error_rms_mm'], 'mm')} / "
         f"{show(summary['tracking_error_p95_mm'], 'mm')} / {show(summary['tracking_error_max_mm'], 'mm')}",
+        f"tracking vs raw hand rms / p95 : {show(summary.get('raw_tracking_error_rms_mm'), 'mm')} / "
+        f"{show(summary.get('raw_tracking_error_p95_mm'), 'mm')}",
+        f"overshoot at reversals   : {show(summary.get('overshoot_mm'), 'mm')}",
         f"final error (settled)    : {show(summary['final_error_mm'], 'mm')}",
         f"latency sensor->driver p50 / p99 : {show(summary['latency_p50_ms'], 'ms')} / "
         f"{show(summary['latency_p99_ms'], 'ms')} ({summary['latency_samples']} commands)",
