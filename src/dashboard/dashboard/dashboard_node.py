@@ -250,6 +250,8 @@ def main():
     url = f"http://{params['host']}:{params['port']}/" + ("?token=<token>" if params["token"] else "")
     try:
         serve(node.state, node, params, on_started=lambda: rospy.loginfo("dashboard: serving %s", url))
+    except KeyboardInterrupt:
+        pass  # uvicorn re-raises the SIGINT it handled (roslaunch's shutdown): a normal end
     finally:
         node.shutdown()
         rospy.signal_shutdown("dashboard stopped")

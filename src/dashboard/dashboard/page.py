@@ -13,6 +13,7 @@ from .status_style import status_view
 
 COLOURS = {"grey": "#9e9e9e", "green": "#2e7d32", "amber": "#f9a825", "orange": "#ef6c00", "red": "#c62828"}
 FILTERS = ["mean", "one_euro", "kalman"]
+REASON_GROUPS = (("engage", "disengage"), ("dry_run", "replay", "delete"), ("campaign_start", "campaign_end"))
 
 
 def _fmt(value, digits=1, unit=""):
@@ -38,10 +39,12 @@ class DashboardPage:
         self.selected_program = None
         self.program_rows_key = None
         self.chart_key = None
+        self.inputs_seeded = False
 
     # -- building ------------------------------------------------------------------------
     def build(self) -> None:
-        ui.add_css(".dash-card { min-width: 330px; } .dash-key { color: #616161; min-width: 130px; }")
+        ui.add_css(".dash-card { width: 370px; } .dash-key { color: #616161; min-width: 130px; }")
+        ui.button.default_props("no-caps")  # labels as written: "Release", and STOP in capitals by itself
         with ui.header().classes("items-center bg-blue-grey-9 q-py-sm"):
             ui.label(self.params["title"]).classes("text-h6")
             self.status_badge = _tid(ui.label("NO STATUS"), "teleop-status").classes(
@@ -94,7 +97,7 @@ class DashboardPage:
                 self.buttons["engage"] = _tid(ui.button("Engage", on_click=lambda: self.on_engage(True)), "engage")
                 self.buttons["disengage"] = _tid(ui.button("Disengage", on_click=lambda: self.on_engage(False)),
                                                  "disengage")
-            self._reason("engage")
+            self._reason("engage")   # one line for both when their reasons agree (see refresh)
             self._reason("disengage")
             with ui.row().classes("items-center"):
                 self.ratio_input = ui.number("new speed ratio", value=1.0, min=0.01, max=10.0, step=0.1,
@@ -123,7 +126,7 @@ class DashboardPage:
             self.drops_label = _tid(ui.label("-"), "drops").classes("text-body2 whitespace-pre")
 
     def _plot_card(self):
-        with ui.card().classes("dash-card").style("min-width: 420px"):
+        with ui.card().classes("dash-card").style("width: 460px"):
             with ui.row().classes("items-center"):
                 ui.label("Hand vs tool path (top view, mm)").classes("text-subtitle1 text-weight-bold")
                 ui.button("Clear", on_click=self.state.clear_paths).props("flat dense")
@@ -134,7 +137,7 @@ class DashboardPage:
                 "yAxis": {"type": "value", "name": "y", "scale": True},
                 "series": [{"name": "hand (mapped)", "type": "line", "showSymbol": False, "data": []},
                            {"name": "tool", "type": "line", "showSymbol": False, "data": []}],
-            }), "path-plot").classes("w-96 h-72")
+            }), "path-plot").classes("w-full h-64")
 
     def _programs_card(self):
         with ui.card().classes("dash-card"):
@@ -229,6 +232,18 @@ class DashboardPage:
             button.set_enabled(states[key].enabled)
             if key in self.reasons:
                 self.reasons[key].set_text(states[key].reason)
+        for group in REASON_GROUPS:   # a reason shared by neighbouring buttons is shown once
+            shown = []
+            for key in group:
+                if states[key].reason in shown:
+                    self.reasons[key].set_text("")
+                shown.append(states[key].reason)
+        # The inputs start at the live values once they are known (not a made-up default).
+        if not self.inputs_seeded and values.get("speed_ratio") is not None and values.get("filter"):
+            self.inputs_seeded = True
+            self.ratio_input.set_value(values["speed_ratio"])
+            if values["filter"] in FILTERS:
+                self.filter_select.set_value(values["filter"])
         self.ratio_input.set_enabled(states["speed_ratio"].enabled)
         self.filter_select.set_enabled(states["filter"].enabled)
 
