@@ -183,4 +183,28 @@ def test_shipped_teleop_yaml_validates():
     path = os.path.join(os.path.dirname(__file__), "..", "..", "src", "motion_commander", "config", "teleop.yaml")
     with open(path, encoding="utf-8") as stream:
         config = load_teleop_config(yaml.safe_load(stream), path)
-    assert config.safety.stale_timeout_s == 0.1 and config.safety.joint_acceleration == 80.0
+    assert config.safety.stale_timeout_s == 0.1 and config.safety.joint_acceleration == 200.0
+
+
+def test_limiter_brakes_in_time_to_stop_at_a_reversing_target():
+    # Issue 14: a command catching up at speed used to run past the point where the hand
+    # turned back (acceleration-limited braking that never planned its stop distance).
+    limiter = JointStepLimiter([3.0], scale=1.0, acceleration_limit=80.0)
+    dt, command, commands = 0.009, 0.0, []
+    for k in range(80):
+        target = 0.4 * np.sin(2 * np.pi * 1.5 * k * dt)     # peaks at 0.4 rad, moving up to 3.8 rad/s
+        limiter.observe_target([target], dt)
+        command = float(limiter.limit([command], [target], dt)[0][0])
+        commands.append(command)
+    # Before the fix the command ran 32 mrad past the peak (0.432 rad).
+    assert max(commands) <= 0.4 + 0.002, f"command ran past the 0.4 rad peak to {max(commands):.4f}"
+
+
+def test_limiter_keeps_pace_with_a_target_moving_at_constant_speed():
+    limiter = JointStepLimiter([3.0], scale=1.0, acceleration_limit=80.0)
+    dt, command = 0.009, 0.0
+    for k in range(1, 60):
+        target = 1.0 * k * dt                              # 1 rad/s
+        limiter.observe_target([target], dt)
+        command = float(limiter.limit([command], [target], dt)[0][0])
+    assert target - command < 0.01, f"lags {target - command:.4f} rad behind a 1 rad/s target"

@@ -17,6 +17,17 @@ import numpy as np
 from .errors import MotionCommanderError
 
 
+def braking_speed(distance, acceleration: float, dt: float):
+    """Largest speed from which steps of ``dt`` s, decelerating by ``acceleration`` each,
+    stop within ``distance`` (element-wise, same unit as distance per s).
+
+    Stopping from v = n a dt covers a dt^2 n (n + 1) / 2 including this step's own move;
+    solving for n gives the discrete form of the familiar sqrt(2 a d).
+    """
+    d = np.abs(np.asarray(distance, dtype=float))
+    return acceleration * dt * (np.sqrt(0.25 + 2.0 * d / (acceleration * dt * dt)) - 0.5)
+
+
 class JointStepLimiter:
     """Limits each command's joint step to the velocity and acceleration limits.
 
@@ -24,7 +35,9 @@ class JointStepLimiter:
     fraction of them teleop may use; ``acceleration_limit`` in rad/s^2 (None: no limit).
     The whole step is scaled by one factor, not joint by joint: clipping joints separately
     would change the direction of motion and pull the tool off its path, while a uniform
-    scale only makes it lag along the path.
+    scale only makes it lag along the path. With an acceleration limit the step is also
+    kept slow enough to stop AT the target (braking_speed): a command catching up with a
+    hand that reverses brakes in time instead of running past the reversal point.
     """
 
     def __init__(self, velocity_limits, scale: float = 0.5, acceleration_limit=None, min_dt: float = 0.002,
@@ -41,32 +54,61 @@ class JointStepLimiter:
         # dt is clamped: a long gap (hand lost, then back) must not permit a big jump.
         self.min_dt = min_dt
         self.max_dt = max_dt
-        self._velocity = None
+        self.reset()
 
     def reset(self) -> None:
         """Start from rest (after engage, resume or a halt)."""
         self._velocity = None
+        self._target = None
+        self._target_velocity = None
 
-    def overshoot(self, previous, target, dt: float, speed_fraction: float = 1.0) -> float:
-        """How many times too large the step to ``target`` is for the velocity limit
-        (<= 1: allowed as is). No side effect."""
+    def observe_target(self, target, dt: float) -> None:
+        """Record this frame's unlimited joint target: its velocity lets a command that
+        follows a moving target keep pace instead of braking as if it were to stop there."""
+        target = np.asarray(target, dtype=float)
+        dt = float(np.clip(dt, self.min_dt, self.max_dt))
+        self._target_velocity = None if self._target is None else (target - self._target) / dt
+        self._target = target
+
+    def _max_step(self, previous, goal, dt: float, speed_fraction: float):
+        """Largest joint step (abs, per joint) allowed toward ``goal`` this step."""
+        max_step = self.max_velocity * dt * max(speed_fraction, 0.0)
+        if self.max_acceleration is None:
+            return max_step
+        error = np.asarray(goal, dtype=float) - np.asarray(previous, dtype=float)
+        # Slow enough to stop where the goal itself would stop if it braked as hard as we
+        # may: a goal moving on at v stops v^2/2a further on (so we keep pace), a goal
+        # slowing down for a reversal brings that point back to its peak (so we brake in
+        # time), and a goal already coming back leaves no distance at all (so we brake now).
+        if self._target_velocity is not None:
+            v = self._target_velocity
+            error = error + v * np.abs(v) / (2.0 * self.max_acceleration)
+        room = np.maximum(error * np.sign(np.asarray(goal, dtype=float) - np.asarray(previous, dtype=float)), 0.0)
+        return np.minimum(max_step, braking_speed(room, self.max_acceleration, dt) * dt)
+
+    def overshoot(self, previous, target, dt: float, speed_fraction: float = 1.0, goal=None) -> float:
+        """How many times too large the step to ``target`` is for the velocity limit and,
+        with an acceleration limit, for stopping at ``goal`` (default: target) (<= 1:
+        allowed as is). No side effect."""
         dt = float(np.clip(dt, self.min_dt, self.max_dt))
         step = np.abs(np.asarray(target, dtype=float) - np.asarray(previous, dtype=float))
-        max_step = self.max_velocity * dt * max(speed_fraction, 0.0)
+        max_step = self._max_step(previous, target if goal is None else goal, dt, speed_fraction)
         if np.any((max_step <= 0) & (step > 0)):
             return float("inf")
         with np.errstate(divide="ignore", invalid="ignore"):
             return float(np.max(np.where(max_step > 0, step / max_step, 0.0)))
 
-    def limit(self, previous, target, dt: float, speed_fraction: float = 1.0):
+    def limit(self, previous, target, dt: float, speed_fraction: float = 1.0, goal=None):
         """Return (command, limited): previous moved toward target within the limits.
 
         ``speed_fraction`` in [0, 1] scales the velocity limit (ramps, singularity slow-down).
+        ``goal`` is where the motion must be able to stop (default: target); the core
+        passes the frame's full IK target when ``target`` is a partial step toward it.
         """
         previous = np.asarray(previous, dtype=float)
         step = np.asarray(target, dtype=float) - previous
         dt = float(np.clip(dt, self.min_dt, self.max_dt))
-        ratio = self.overshoot(previous, target, dt, speed_fraction)
+        ratio = self.overshoot(previous, target, dt, speed_fraction, goal)
         limited = ratio > 1.0
         if limited:
             step = step / ratio if np.isfinite(ratio) else np.zeros_like(step)

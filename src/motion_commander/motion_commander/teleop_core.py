@@ -203,13 +203,15 @@ class TeleopCore:
             flags.append(TeleopStatus.SINGULARITY_HALT if singular == 0.0 else TeleopStatus.SINGULARITY_SLOWDOWN)
         speed = min(fraction, singular)
         dt = stamp - self._command_stamp
+        goal = joints
+        self.limiter.observe_target(goal, dt)
         overshoot = self.limiter.overshoot(self._command, joints, dt, speed)
         if 1.0 < overshoot < float("inf"):
             # Too far for one step: aim at the point 1/overshoot of the way along the
             # Cartesian path instead of cutting straight through joint space, which can
             # swing the tool far off the path when the IK solution moved a lot.
             joints = self._partial_step(target_position, target_orientation, 1.0 / overshoot, joints)
-        joints, limited = self.limiter.limit(self._command, joints, dt, speed)
+        joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal)
         if limited and not flags:
             flags.append(TeleopStatus.JOINT_SPEED_LIMITED)
         self._command = joints
