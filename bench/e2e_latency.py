@@ -3,7 +3,11 @@ command, per stage (sensor -> sequencer -> core -> driver), while replaying the 
 Leap recordings through launch/teleop_sim.launch. The replay stamps each frame as it
 publishes it, so every millisecond measured is added by the framework.
 
-Run: bench/run e2e_latency [--recordings NAME ...]
+Baseline in the same run: the transport floor (bench/transport_floor.py), a bare rospy
+chain with the session's three hops and message types doing no work, >= 1000 commands.
+Absolute figures move with the machine; the ratios to the floor are what compare.
+
+Run: bench/run e2e_latency [--recordings NAME ...] [--floor-count 1100]
 Writes bench/results/e2e_latency.json.
 """
 import argparse
@@ -11,8 +15,10 @@ import json
 import os
 import subprocess
 import tempfile
+import time
 
 from bench_common import write_results
+from transport_floor import run_floor
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 DEFAULT = ["Waiting-110fps", "test-paddle-rightwards", "rollAndPitchCropped"]
@@ -30,24 +36,58 @@ def run_session(recording):
         return json.load(fh)
 
 
+def measure_floor(count):
+    """The transport floor on its own master (port PORT + 1); per-hop figures."""
+    env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT + 1}")
+    core = subprocess.Popen(["roscore", "-p", str(PORT + 1)], env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    try:
+        import rosgraph
+        master = rosgraph.Master("/e2e_bench", master_uri=env["ROS_MASTER_URI"])
+        for _ in range(200):
+            try:
+                master.getPid()
+                break
+            except Exception:  # not up yet
+                time.sleep(0.1)
+        return run_floor(count, 110.0, env)
+    finally:
+        core.terminate()
+        core.wait(timeout=30)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--recordings", nargs="+", default=DEFAULT, help="names in tests/data (without .jsonl.gz)")
+    parser.add_argument("--floor-count", type=int, default=1100, help="commands through the transport floor")
     args = parser.parse_args()
+    print(f"transport floor ({args.floor_count} commands at 110 Hz)...", flush=True)
+    floor_hops = measure_floor(args.floor_count)
+    floor = floor_hops["sensor->server"]
+    print(f"    floor: p50={floor['p50']} ms p99={floor['p99']} ms (n={floor['n']})", flush=True)
+    print(f"    floor hops: {floor_hops}", flush=True)
     results = {}
     for index, name in enumerate(args.recordings, start=1):
         print(f"[{index}/{len(args.recordings)}] session on {name}...", flush=True)
         summary = run_session(name)
         results[name] = {key: summary[key] for key in ("frames_in", "frames_out", "commands_sent", "latency_p50_ms",
                                                         "latency_p99_ms", "stage_latency_ms",
-                                                        "tracking_error_rms_mm")}
+                                                        "tracking_error_rms_mm", "frames_dropped", "latency_samples")}
+        ratio_p50 = round(summary["latency_p50_ms"] / floor["p50"], 2)
+        ratio_p99 = round(summary["latency_p99_ms"] / floor["p99"], 2)
+        results[name].update(vs_floor_p50=ratio_p50, vs_floor_p99=ratio_p99)
         print(f"    sensor->driver p50 {summary['latency_p50_ms']} ms, p99 {summary['latency_p99_ms']} ms, "
               f"stages {summary['stage_latency_ms']}", flush=True)
-    worst_p99 = max(r["latency_p99_ms"] for r in results.values())
-    results["worst_p99_ms"] = worst_p99
-    results["goal_p99_ms"] = 5.0
+        print(f"    vs floor: p50 x{ratio_p50}, p99 x{ratio_p99} ({summary['latency_samples']} commands; "
+              f"frames dropped {summary['frames_dropped']})", flush=True)
+    sessions = [r for r in results.values()]
+    worst_p50 = max(r["vs_floor_p50"] for r in sessions)
+    worst_p99 = max(r["vs_floor_p99"] for r in sessions)
+    results["floor"] = floor_hops
+    results["worst_vs_floor"] = {"p50": worst_p50, "p99": worst_p99, "goal_p50": 2.0, "goal_p99": 3.0}
     write_results("e2e_latency", results, show=False)
-    print(f"worst p99 {worst_p99} ms (goal <= 5 ms)")
+    print(f"floor: p50={floor['p50']} ms p99={floor['p99']} ms; worst session vs floor: p50 x{worst_p50}, "
+          f"p99 x{worst_p99} (goal x2 / x3)")
 
 
 if __name__ == "__main__":
