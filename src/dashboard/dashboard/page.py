@@ -17,7 +17,7 @@ REASON_GROUPS = (("engage", "disengage"), ("dry_run", "replay", "delete"), ("cam
 
 
 def _fmt(value, digits=1, unit=""):
-    if value is None:
+    if value is None or value != value:  # None or NaN (no samples yet)
         return "-"
     return f"{value:.{digits}f}{unit}"
 
