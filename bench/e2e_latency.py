@@ -7,7 +7,12 @@ Baseline in the same run: the transport floor (bench/transport_floor.py), a bare
 chain with the session's three hops and message types doing no work, >= 1000 commands.
 Absolute figures move with the machine; the ratios to the floor are what compare.
 
-Run: bench/run e2e_latency [--recordings NAME ...] [--floor-count 1100]
+With --netns (needs root and `ip netns`), each recording is also played across two
+network namespaces joined by a veth pair (scripts/two_machines.py: sensor side = device +
+sequencer, robot side = master + core + driver, own ROS_IP each) and compared with its
+same-machine figure of this run.
+
+Run: bench/run e2e_latency [--recordings NAME ...] [--floor-count 1100] [--netns]
 Writes bench/results/e2e_latency.json.
 """
 import argparse
@@ -15,12 +20,14 @@ import json
 import os
 import subprocess
 import tempfile
+import sys
 import time
 
 from bench_common import write_results
 from transport_floor import run_floor
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
 DEFAULT = ["Waiting-110fps", "test-paddle-rightwards", "rollAndPitchCropped"]
 PORT = 11478
 
@@ -56,10 +63,33 @@ def measure_floor(count):
         core.wait(timeout=30)
 
 
+def measure_netns(name, same_machine):
+    """``name`` across two network namespaces; its figures and ratios to ``same_machine``."""
+    import two_machines
+    reason = two_machines.netns_unavailable()
+    if reason:
+        print(f"two machines (netns): skipped, {reason}", flush=True)
+        return {"skipped": reason}
+    print(f"two machines (netns) on {name}...", flush=True)
+    summary = two_machines.run_monitored_session(os.path.join(ROOT, "tests", "data", name + ".jsonl.gz"),
+                                                 tempfile.mkdtemp(prefix="e2e-netns-"))
+    row = {key: summary[key] for key in ("latency_p50_ms", "latency_p99_ms", "latency_samples", "frames_dropped",
+                                         "stage_latency_ms")}
+    row.update(recording=name, vs_same_machine_p50=round(summary["latency_p50_ms"] / same_machine["latency_p50_ms"], 2),
+               vs_same_machine_p99=round(summary["latency_p99_ms"] / same_machine["latency_p99_ms"], 2))
+    print(f"    sensor->driver p50 {row['latency_p50_ms']} ms, p99 {row['latency_p99_ms']} ms, "
+          f"stages {row['stage_latency_ms']}", flush=True)
+    print(f"    vs same machine: p50 x{row['vs_same_machine_p50']}, p99 x{row['vs_same_machine_p99']} "
+          f"({row['latency_samples']} commands; frames dropped {row['frames_dropped']})", flush=True)
+    return row
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--recordings", nargs="+", default=DEFAULT, help="names in tests/data (without .jsonl.gz)")
     parser.add_argument("--floor-count", type=int, default=1100, help="commands through the transport floor")
+    parser.add_argument("--netns", action="store_true",
+                        help="also play each recording across two network namespaces (root)")
     args = parser.parse_args()
     print(f"transport floor ({args.floor_count} commands at 110 Hz)...", flush=True)
     floor_hops = measure_floor(args.floor_count)
@@ -80,7 +110,9 @@ def main():
               f"stages {summary['stage_latency_ms']}", flush=True)
         print(f"    vs floor: p50 x{ratio_p50}, p99 x{ratio_p99} ({summary['latency_samples']} commands; "
               f"frames dropped {summary['frames_dropped']})", flush=True)
-    sessions = [r for r in results.values()]
+    if args.netns:
+        results["netns"] = {name: measure_netns(name, results[name]) for name in args.recordings}
+    sessions = [r for name, r in results.items() if name != "netns"]
     worst_p50 = max(r["vs_floor_p50"] for r in sessions)
     worst_p99 = max(r["vs_floor_p99"] for r in sessions)
     results["floor"] = floor_hops
@@ -88,6 +120,11 @@ def main():
     write_results("e2e_latency", results, show=False)
     print(f"floor: p50={floor['p50']} ms p99={floor['p99']} ms; worst session vs floor: p50 x{worst_p50}, "
           f"p99 x{worst_p99} (goal x2 / x3)")
+    for name, row in results.get("netns", {}).items():
+        if "skipped" not in row:
+            print(f"two machines (netns), {name}: sensor->driver p50 {row['latency_p50_ms']} ms, "
+                  f"p99 {row['latency_p99_ms']} ms; vs same machine p50 x{row['vs_same_machine_p50']}, "
+                  f"p99 x{row['vs_same_machine_p99']}")
 
 
 if __name__ == "__main__":
