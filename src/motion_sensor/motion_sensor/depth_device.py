@@ -17,7 +17,8 @@ import numpy as np
 from motion_common.params import Param, ParamSchema
 
 from .depth_hand import TRACKER_PARAMS, DepthHandTracker
-from .depth_image import DepthImageError, Intrinsics, decode_depth, intrinsics_from_camera_info
+from .camera_intrinsics import Intrinsics
+from .depth_image import DepthImageError, decode_depth, intrinsics_from_camera_info
 from .device import HandDevice, empty_sample
 from .hand_sample import HandSample
 

@@ -39,7 +39,7 @@ from scipy.spatial.transform import Rotation
 
 from motion_common.params import Param, ParamSchema
 
-from .depth_image import Intrinsics
+from .camera_intrinsics import Intrinsics
 from .errors import MotionSensorError
 
 TRACKER_PARAMS = ParamSchema([

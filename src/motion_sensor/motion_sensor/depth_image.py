@@ -7,11 +7,11 @@ compares numbers only). ``intrinsics_from_camera_info`` reads the pinhole part o
 sensor_msgs/CameraInfo. Anything unusable raises ``DepthImageError`` whose ``reason`` is a
 short key the device counts on /diagnostics (``rejected_<reason>``).
 """
-from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 
+from .camera_intrinsics import Intrinsics
 from .errors import MotionSensorError
 
 #: Depths beyond this are no measurement (m): no depth camera sees further.
@@ -24,18 +24,6 @@ class DepthImageError(MotionSensorError):
     def __init__(self, reason: str, message: str):
         super().__init__(message)
         self.reason = reason
-
-
-@dataclass(frozen=True)
-class Intrinsics:
-    """Pinhole intrinsics of the depth image (pixels): focal lengths, principal point, size."""
-
-    fx: float
-    fy: float
-    cx: float
-    cy: float
-    width: int
-    height: int
 
 
 def intrinsics_from_camera_info(k: Sequence[float], width: int, height: int) -> Intrinsics:

@@ -7,17 +7,8 @@ import rospy
 from sensor_msgs.msg import CameraInfo, Image
 
 from .depth_device import DepthMessage, DepthTopicDevice
-from .device_node import DeviceNode
+from .device_node import DeviceNode, spin_device_node
 from .kinect import FakenectKinectDevice, KinectDevice
-
-
-def _spin(node: DeviceNode) -> None:
-    try:
-        node.spin()
-        if not node.runner.finished and not rospy.is_shutdown():
-            rospy.spin()
-    except rospy.ROSInterruptException:
-        pass
 
 
 def run_depth_node(node_name: str = "depth_hand_driver") -> None:
@@ -38,11 +29,11 @@ def run_depth_node(node_name: str = "depth_hand_driver") -> None:
     # A 640x480 16UC1 image is 600 kB: a large buffer keeps rospy from queueing stale ones.
     rospy.Subscriber(device.config["image_topic"], Image, on_image, queue_size=2, buff_size=1 << 24,
                      tcp_nodelay=True)
-    _spin(node)
+    spin_device_node(node)
 
 
 def run_kinect_node(node_name: str = "kinect_driver") -> None:
     """Hands from a Kinect v1 (libfreenect), or from a fakenect dump when ~fakenect_dump is set."""
     rospy.init_node(node_name)
     device_cls = FakenectKinectDevice if rospy.get_param("~fakenect_dump", "") else KinectDevice
-    _spin(DeviceNode(device_cls, node_name))
+    spin_device_node(DeviceNode(device_cls, node_name))

@@ -150,7 +150,12 @@ class DeviceNode:
 def run_device_node(device_cls, node_name: str) -> None:
     """The whole life of a device node: init, parameters, readiness, stream, exit."""
     rospy.init_node(node_name)
-    node = DeviceNode(device_cls, node_name)
+    spin_device_node(DeviceNode(device_cls, node_name))
+
+
+def spin_device_node(node: DeviceNode) -> None:
+    """Run the device's stream; if it returns before the source has finished (a device
+    fed by subscriber callbacks), keep the node spinning until ROS shuts down."""
     try:
         node.spin()
         if not node.runner.finished and not rospy.is_shutdown():

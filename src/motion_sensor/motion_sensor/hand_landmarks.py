@@ -21,6 +21,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from .camera_intrinsics import Intrinsics
+
 WRIST = 0
 THUMB_TIP = 4
 INDEX_MCP, INDEX_TIP = 5, 8
@@ -50,23 +52,6 @@ class DetectedHand:
     world: np.ndarray
     handedness: str
     score: float
-
-
-@dataclass(frozen=True)
-class Intrinsics:
-    """Pinhole camera intrinsics in pixels."""
-
-    fx: float
-    fy: float
-    cx: float
-    cy: float
-
-    @classmethod
-    def from_fov(cls, width: int, height: int, hfov_deg: float) -> "Intrinsics":
-        """Square pixels, centred principal point, focal length from the horizontal field of
-        view (a webcam's data sheet value when it was never calibrated)."""
-        fx = 0.5 * width / np.tan(np.radians(hfov_deg) / 2.0)
-        return cls(fx, fx, 0.5 * width, 0.5 * height)
 
 
 @dataclass(frozen=True)

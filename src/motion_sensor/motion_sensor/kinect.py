@@ -25,7 +25,7 @@ from motion_common.params import Param, ParamSchema
 from . import fakenect
 from .depth_device import IMAGE_CHECK_PARAMS, DepthHandDevice
 from .depth_hand import TRACKER_PARAMS
-from .depth_image import Intrinsics
+from .camera_intrinsics import Intrinsics
 from .errors import DeviceUnavailable, EndOfStream, MotionSensorError
 from .hand_sample import HandSample
 

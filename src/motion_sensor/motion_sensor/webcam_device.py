@@ -20,7 +20,8 @@ from motion_common.params import Param, ParamSchema
 
 from .device import HandDevice
 from .errors import DeviceUnavailable, EndOfStream, MotionSensorError
-from .hand_landmarks import GestureThresholds, Intrinsics
+from .camera_intrinsics import Intrinsics
+from .hand_landmarks import GestureThresholds
 from .hand_sample import HandSample
 from .webcam_hand import FrameLimits, WebcamHandTracker
 

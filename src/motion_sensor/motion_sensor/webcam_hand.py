@@ -12,7 +12,8 @@ from typing import Optional, Tuple
 import numpy as np
 
 from .device import empty_sample
-from .hand_landmarks import GestureThresholds, Intrinsics, landmark_problem, palm_pose
+from .camera_intrinsics import Intrinsics
+from .hand_landmarks import GestureThresholds, landmark_problem, palm_pose
 from .hand_sample import HandSample
 from .mediapipe_hands import HandDetector
 
