@@ -7,12 +7,14 @@ from typing import Callable, Dict
 
 from nicegui import app, run, ui
 
+from motion_sensor.filters import FILTERS as FILTER_REGISTRY
+
 from .access import token_accepted
 from .controls import control_states
 from .status_style import status_view
 
 COLOURS = {"grey": "#9e9e9e", "green": "#2e7d32", "amber": "#f9a825", "orange": "#ef6c00", "red": "#c62828"}
-FILTERS = ["mean", "one_euro", "kalman"]
+FILTERS = list(FILTER_REGISTRY)   # the sequencer's filters, in its order
 REASON_GROUPS = (("engage", "disengage"), ("dry_run", "replay", "delete"), ("campaign_start", "campaign_end"))
 
 

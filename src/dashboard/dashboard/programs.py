@@ -12,7 +12,6 @@ class ProgramInfo:
     """One program file as the page lists it."""
 
     name: str                 # file name without .yaml
-    path: str
     modified: float           # s since the epoch
     robot: str = ""
     waypoints: int = 0
@@ -27,7 +26,7 @@ def list_programs(folder: str) -> List[ProgramInfo]:
     for entry in os.scandir(folder):
         if not entry.is_file() or not entry.name.endswith(".yaml"):
             continue
-        info = ProgramInfo(entry.name[:-len(".yaml")], entry.path, entry.stat().st_mtime)
+        info = ProgramInfo(entry.name[:-len(".yaml")], entry.stat().st_mtime)
         try:
             program = load_program(entry.path)
             info.robot, info.waypoints = program.robot, len(program.waypoints)

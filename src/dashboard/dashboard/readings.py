@@ -1,5 +1,6 @@
 """Plain readings of ROS message contents for the page (no ROS import: the node passes
 key/value pairs and numbers)."""
+from collections import deque
 from typing import Dict, Iterable, Optional, Tuple
 
 import numpy as np
@@ -56,22 +57,19 @@ class LatencyWindow:
     """The last ``size`` sensor-to-driver latencies (s), for p50/p99 on the page."""
 
     def __init__(self, size: int = 500):
-        self.size = size
-        self._values = []
+        self._values = deque(maxlen=size)
 
     def add(self, seconds: float) -> None:
         """Record one command's latency; non-finite or negative values are ignored."""
         if np.isfinite(seconds) and seconds >= 0.0:
             self._values.append(float(seconds))
-            if len(self._values) > self.size:
-                del self._values[:len(self._values) - self.size]
 
     def percentiles_ms(self) -> Optional[Tuple[float, float, int]]:
         """(p50, p99, count) in ms, or None before the first command."""
         if not self._values:
             return None
-        values = np.asarray(self._values) * 1000.0
-        return float(np.percentile(values, 50)), float(np.percentile(values, 99)), len(values)
+        p50, p99 = np.percentile(np.asarray(self._values) * 1000.0, [50, 99])
+        return float(p50), float(p99), len(self._values)
 
 
 def tool_reading(position, quaternion) -> Dict[str, list]:

@@ -39,4 +39,4 @@ def status_view(code: Optional[int]) -> Tuple[str, str]:
 
 def is_engaged(code: Optional[int]) -> bool:
     """True when the status code means the clutch is closed."""
-    return code is not None and code in {int(s) for s in ENGAGED_STATUSES}
+    return code in ENGAGED_STATUSES   # IntEnum members hash and compare as their ints

@@ -14,6 +14,13 @@ from .errors import MotionCommanderError
 from motion_common.kinematics import matrix_to_quat, quat_to_matrix
 
 
+def _checked_ratio(speed_ratio) -> float:
+    """``speed_ratio`` as a float; MotionCommanderError unless finite and > 0."""
+    if not (np.isfinite(speed_ratio) and speed_ratio > 0):
+        raise MotionCommanderError(f"speed_ratio must be a finite number > 0, got {speed_ratio!r}")
+    return float(speed_ratio)
+
+
 class TeleopMapper:
     """Relative, scaled mapping from hand space {O} to robot space {W}.
 
@@ -22,8 +29,7 @@ class TeleopMapper:
     """
 
     def __init__(self, speed_ratio: float = 1.0, hand_to_robot=None, follow_orientation: bool = True):
-        if not (np.isfinite(speed_ratio) and speed_ratio > 0):
-            raise MotionCommanderError(f"speed_ratio must be a finite number > 0, got {speed_ratio!r}")
+        speed_ratio = _checked_ratio(speed_ratio)
         rotation = np.eye(3) if hand_to_robot is None else np.asarray(hand_to_robot, dtype=float)
         if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6):
             raise MotionCommanderError("hand_to_robot must be a 3x3 rotation matrix")
@@ -61,9 +67,8 @@ class TeleopMapper:
         target there is unchanged and only motion from now on is scaled by the new ratio.
         Orientation does not depend on the ratio, so its references stay.
         """
-        if not (np.isfinite(speed_ratio) and speed_ratio > 0):
-            raise MotionCommanderError(f"speed_ratio must be a finite number > 0, got {speed_ratio!r}")
-        if self.engaged and self._last_hand is not None:
+        speed_ratio = _checked_ratio(speed_ratio)
+        if self.engaged:
             hand_p0, hand_r0 = self._hand_ref
             tool_p0, tool_r0 = self._tool_ref
             anchor = self._last_hand.copy()
