@@ -19,12 +19,11 @@ import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
+from bench_common import RESULTS, ROOT, write_results
+
 for path in ("src/motion_common", "src/motion_sensor", "tests/tools"):
     sys.path.insert(0, os.path.join(ROOT, path))
 
-from bench_common import RESULTS, write_results  # noqa: E402
 from hand_warp import HEIGHT, PHOTOS, WIDTH, warped_sequence  # noqa: E402
 from motion_sensor.mediapipe_hands import MediaPipeHandDetector  # noqa: E402
 from motion_sensor.webcam_hand import WebcamHandTracker  # noqa: E402

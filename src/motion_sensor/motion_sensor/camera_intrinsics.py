@@ -1,7 +1,11 @@
-"""Pinhole camera intrinsics, shared by the camera hand devices (depth camera, Kinect, webcam)."""
+"""Pinhole camera intrinsics and the optical-to-REP 103 rotation, shared by the camera hand
+devices (depth camera, Kinect, webcam)."""
 from dataclasses import dataclass
 
 import numpy as np
+
+# Optical axes (x right, y down, z forward) to REP 103 body axes (x forward, y left, z up).
+OPTICAL_TO_REP103 = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 
 
 @dataclass(frozen=True)

@@ -39,7 +39,7 @@ from scipy.spatial.transform import Rotation
 
 from motion_common.params import Param, ParamSchema
 
-from .camera_intrinsics import Intrinsics
+from .camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
 from .errors import MotionSensorError
 
 TRACKER_PARAMS = ParamSchema([
@@ -62,8 +62,7 @@ TRACKER_PARAMS = ParamSchema([
     Param("jump_m", 0.15, unit="m", low=0, low_open=True, doc="a palm moving further between frames is a new hand id"),
 ])
 
-# Optical axes (x right, y down, z forward) to REP 103 body axes (x forward, y left, z up).
-OPTICAL_TO_BODY = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+OPTICAL_TO_BODY = OPTICAL_TO_REP103   # the name the depth tests and bench use
 
 
 @dataclass
@@ -75,8 +74,6 @@ class DepthHand:
     hand_types: Tuple[str, ...]          # one per hand seen, primary first
     hand_id: int
     grab_strength: float
-    pixel: Tuple[float, float]           # palm centre (u, v) in the image
-    palm_radius_m: float                 # distance-transform maximum at the palm's depth
 
     @property
     def hands_num(self) -> int:
@@ -134,7 +131,7 @@ class DepthHandTracker:
             types.append("left" if types[0] == "right" else "right")
             if c["hand_type"] == "by_position":
                 types[1] = "right" if -other[2] > 0 else "left"
-        position_opt, rotation_opt, grab, pixel, radius_m = hand
+        position_opt, rotation_opt, grab = hand
         if self._last_position is None or np.linalg.norm(position_opt - self._last_position) > c["jump_m"]:
             self._hand_id += 1
         self._last_position = position_opt
@@ -143,7 +140,7 @@ class DepthHandTracker:
         quaternion = Rotation.from_matrix(rotation).as_quat()
         self.last_reason = ""
         return DepthHand(position=position, orientation=quaternion, hand_types=tuple(types), hand_id=self._hand_id,
-                         grab_strength=grab, pixel=pixel, palm_radius_m=radius_m)
+                         grab_strength=grab)
 
     def _lost(self):
         self._last_position = None
@@ -268,4 +265,4 @@ class DepthHandTracker:
         rotation = np.column_stack((axis, np.cross(normal, axis), normal))
         reach = float((offsets @ axis).max())
         grab = float(np.clip((c["open_extent_m"] - reach) / (c["open_extent_m"] - c["fist_extent_m"]), 0.0, 1.0))
-        return centre, rotation, grab, (u, v), palm_r
+        return centre, rotation, grab

@@ -21,7 +21,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .camera_intrinsics import Intrinsics
+from .camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
 
 WRIST = 0
 THUMB_TIP = 4
@@ -34,13 +34,6 @@ NUM_LANDMARKS = 21
 PALM = (WRIST, INDEX_MCP, MIDDLE_MCP, RING_MCP, PINKY_MCP)
 #: (MCP, PIP, DIP, TIP) of the four fingers.
 FINGERS = tuple((base, base + 1, base + 2, base + 3) for base in (INDEX_MCP, MIDDLE_MCP, RING_MCP, PINKY_MCP))
-
-# Optical axes (x right, y down, z forward) to REP 103 (x forward, y left, z up): the
-# rotation between a camera's optical frame and its body frame.
-OPTICAL_TO_REP103 = np.array([[0.0, 0.0, 1.0],
-                              [-1.0, 0.0, 0.0],
-                              [0.0, -1.0, 0.0]])
-
 
 @dataclass
 class DetectedHand:
@@ -217,9 +210,10 @@ def palm_pose(hand: DetectedHand, intrinsics: Intrinsics, depth_scale: float = 1
         raise ValueError("no depth: the palm landmarks have no consistent size")
     # Scaling the model's hand and its translation together keeps every projection: the
     # calibrated hand is the same picture of a hand depth_scale times the model's size.
-    centre = depth_scale * (translation + world[list(PALM)].mean(axis=0))
+    raw_centre = translation + world[list(PALM)].mean(axis=0)
+    centre = depth_scale * raw_centre
     index_tip = depth_scale * (translation + world[INDEX_TIP])
-    raw_depth = float(translation[2] + world[list(PALM)].mean(axis=0)[2])
+    raw_depth = float(raw_centre[2])
     rotation = palm_rotation(world, hand.handedness)
     return PalmPose(position=OPTICAL_TO_REP103 @ centre,
                     orientation=matrix_to_quaternion(OPTICAL_TO_REP103 @ rotation),

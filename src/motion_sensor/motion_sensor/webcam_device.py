@@ -16,7 +16,8 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from motion_common.params import Param, ParamSchema
+from motion_common.errors import ParameterError
+from motion_common.params import Param, ParamSchema, read_yaml_file
 
 from .device import HandDevice
 from .errors import DeviceUnavailable, EndOfStream, MotionSensorError
@@ -25,20 +26,15 @@ from .hand_landmarks import GestureThresholds
 from .hand_sample import HandSample
 from .webcam_hand import FrameLimits, WebcamHandTracker
 
-CALIBRATION_KEYS = ("depth_scale",)
-
 
 def load_depth_scale(path: str) -> float:
     """``depth_scale`` from a calibration YAML written by webcam_hand_calibrate; raises
     MotionSensorError naming the file when it cannot be used."""
-    import yaml
-
     try:
-        with open(path, encoding="utf-8") as fh:
-            data = yaml.safe_load(fh)
-    except (OSError, yaml.YAMLError) as exc:
-        raise MotionSensorError(f"cannot read webcam calibration {path}: {exc}; "
-                                "run webcam_hand_calibrate or leave calibration_file empty") from None
+        data = read_yaml_file(path)
+    except ParameterError as exc:
+        raise MotionSensorError(f"webcam calibration {exc}; run webcam_hand_calibrate or leave "
+                                "calibration_file empty") from None
     value = data.get("depth_scale") if isinstance(data, dict) else None
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.05 <= value <= 20:
         raise MotionSensorError(f"{path}: depth_scale must be a number in [0.05, 20], got {value!r}")

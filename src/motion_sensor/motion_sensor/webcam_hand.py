@@ -70,7 +70,6 @@ class WebcamHandTracker:
         self.mirrored = mirrored
         self.counters: Counter = Counter()
         self.last_problem = ""
-        self.last_raw_depth = float("nan")
         self._hand_id = 0
         self._tracked_type = ""
 
@@ -112,7 +111,6 @@ class WebcamHandTracker:
             self._hand_id += 1
             self._tracked_type = primary.handedness
         self.counters["hands"] += 1
-        self.last_raw_depth = pose.raw_depth
         others = [hand.handedness for hand in usable if hand is not primary]
         return HandSample(stamp=stamp, position=pose.position, orientation=pose.orientation,
                           hands_num=len(usable), hand_types=tuple([primary.handedness] + others),
