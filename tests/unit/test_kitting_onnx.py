@@ -285,3 +285,21 @@ def test_model_file_errors_say_what_to_do(tmp_path):
     assert OnnxDetector(obb, class_names=NAMES, task="obb").task == "obb"
     with pytest.raises(OnnxModelError, match="multiples of 32"):
         OnnxDetector(build_model(tmp_path / "m.onnx", metadata=False), class_names=NAMES, input_size=300)
+
+
+def test_belt_inner_is_eroded_again_for_a_new_belt_mask():
+    """Each re-registration gives the detectors a new belt mask: the edge zone must follow it
+    (the ONNX detector used to keep the first mask's)."""
+    from kitting.detector import BeltInner
+    inner = BeltInner()
+    first = np.zeros((60, 80), np.uint8)
+    first[10:50, 10:40] = 255
+    moved = np.zeros((60, 80), np.uint8)
+    moved[10:50, 40:70] = 255
+    a = inner.get(first, first.shape, 3)
+    assert a[30, 25] and not a[30, 55]
+    assert inner.get(first, first.shape, 3) is a          # same mask: reused, not eroded again
+    b = inner.get(moved, moved.shape, 3)
+    assert b[30, 55] and not b[30, 25]
+    whole = inner.get(None, (60, 80), 3)                   # no mask: only the image border is edge
+    assert whole[30, 40] and not whole[1, 40]

@@ -126,6 +126,25 @@ def check_image(image) -> str:
     return ""
 
 
+class BeltInner:
+    """The belt region less an edge zone of ``edge`` px (the image border counts as an
+    edge), eroded once per belt mask: the vision pipeline replaces the mask at each
+    (re-)registration, frames in between reuse it."""
+
+    def __init__(self):
+        self._mask, self._key, self._inner = None, None, None
+
+    def get(self, belt_mask: Optional[np.ndarray], shape, edge: int) -> np.ndarray:
+        """The eroded region for ``belt_mask`` (None: the whole image of ``shape``)."""
+        key = (tuple(shape), int(edge))
+        if self._inner is None or belt_mask is not self._mask or key != self._key:
+            region = np.full(key[0], 255, np.uint8) if belt_mask is None else belt_mask
+            kernel = np.ones((2 * edge + 1, 2 * edge + 1), np.uint8)
+            self._inner = cv2.erode(region, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0)
+            self._mask, self._key = belt_mask, key   # holding the mask keeps its identity unique
+        return self._inner
+
+
 def input_problem(image, belt_mask=None) -> str:
     """'' when a detector can use ``image`` with ``belt_mask`` (or None), else why not."""
     problem = check_image(image)
@@ -146,6 +165,7 @@ class ClassicalDetector:
                  mm_per_px: float = 1.0, params: Optional[dict] = None):
         self.params = DETECTOR_SCHEMA.validate(params or {}, "detector")
         self.belt_mask = belt_mask
+        self._belt_inner = BeltInner()
         self.to_plane = to_plane or (lambda px: np.asarray(px, float) * mm_per_px / 1000.0)
 
     def detect(self, image) -> DetectionResult:
@@ -165,7 +185,7 @@ class ClassicalDetector:
         mask = np.where(foreground & (region > 0), 255, 0).astype(np.uint8)
         # Edge zone: the image border and the belt region's border.
         edge = P["edge_px"] + 1
-        inner = cv2.erode(region, np.ones((2 * edge + 1, 2 * edge + 1), np.uint8), borderType=cv2.BORDER_CONSTANT, borderValue=0)
+        inner = self._belt_inner.get(self.belt_mask, (h, w), edge)
         contours, hierarchy = cv2.findContours(mask, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
         if hierarchy is None:
             return result

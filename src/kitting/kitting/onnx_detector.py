@@ -61,7 +61,7 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 import cv2
 import numpy as np
 
-from .detector import Detection, DetectionResult, Rejection, input_problem
+from .detector import BeltInner, Detection, DetectionResult, Rejection, input_problem
 from .parts import PART_CLASSES
 
 LETTERBOX_GREY = 114
@@ -155,7 +155,7 @@ class OnnxDetector:
         self.model_path = os.path.abspath(os.path.expanduser(str(model_path)))
         self.score_threshold, self.report_threshold, self.nms_iou = score_threshold, report_threshold, nms_iou
         self.belt_mask, self.edge_px, self.max_detections = belt_mask, int(edge_px), int(max_detections)
-        self._inner = None
+        self._belt_inner = BeltInner()
         self.session = self._open(threads)
         meta = self.session.get_modelmeta().custom_metadata_map or {}
         self.metadata = dict(meta)
@@ -323,11 +323,8 @@ class OnnxDetector:
         if c0 < margin + 1 or r0 < margin + 1 or c1 > w - margin - 2 or r1 > h - margin - 2:
             return "edge"
         if self.belt_mask is not None:
-            if self._inner is None:
-                edge = margin + 1
-                self._inner = cv2.erode(self.belt_mask, np.ones((2 * edge + 1, 2 * edge + 1), np.uint8),
-                                        borderType=cv2.BORDER_CONSTANT, borderValue=0)
-            if not self._inner[r0:r1 + 1, c0:c1 + 1].all():
+            inner = self._belt_inner.get(self.belt_mask, self.belt_mask.shape, margin + 1)
+            if not inner[r0:r1 + 1, c0:c1 + 1].all():
                 return "edge"
         return "ok"
 
