@@ -18,8 +18,8 @@ from kitting.camera import PinholeCamera
 from kitting.frame_source import DeviceSource, FrameSourceError, ImageFolderSource, VideoSource, open_source
 from kitting.image_msgs import (array_to_image, bgr_to_image, camera_info_from_intrinsics, image_to_bgr,
                                 intrinsics_from_camera_info)
-from kitting.intrinsics_file import (IntrinsicsFileError, load_camera_info_yaml, resolve_camera_info_url,
-                                     save_intrinsics_yaml)
+from kitting.calibration import write_intrinsics_yaml
+from kitting.intrinsics_file import IntrinsicsFileError, load_camera_info_yaml, resolve_camera_info_url
 from kitting.sim_scene import render_board_views
 from motion_sensor.device import Backoff
 
@@ -313,7 +313,7 @@ def test_camera_info_round_trip_and_refusals():
 def test_intrinsics_yaml_is_saved_atomically_and_read_back(tmp_path):
     K = np.array([[600.5, 0, 319.0], [0, 601.5, 240.0], [0, 0, 1]])
     path = str(tmp_path / "calib" / "camera.yaml")
-    save_intrinsics_yaml(path, Intrinsics(K, np.zeros(5), (640, 480), 0.25), "cam_a")
+    write_intrinsics_yaml(path, Intrinsics(K, np.zeros(5), (640, 480), 0.25), "cam_a")
     assert os.listdir(tmp_path / "calib") == ["camera.yaml"]               # no temporary left
     info = load_camera_info_yaml(path)
     assert (info.width, info.height) == (640, 480) and list(info.K) == list(K.ravel())

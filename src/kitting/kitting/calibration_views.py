@@ -32,7 +32,6 @@ class ViewCollector:
         self.spec, self.count, self.min_corners = spec, count, min_corners
         self.interval, self.min_motion_px = interval, min_motion_px
         self.views: List[np.ndarray] = []           # the frames taken, as given
-        self.corners: List[int] = []                # corners seen in each view
         self.last_time: Optional[float] = None
         self.last_points: Optional[dict] = None     # board corner (x, y) in m -> pixel
 
@@ -59,6 +58,5 @@ class ViewCollector:
                     return False, f"board moved {shift:.0f} px since the last view (move it at least " \
                                   f"{self.min_motion_px:.0f} px, or tilt it)"
         self.views.append(np.asarray(image).copy())
-        self.corners.append(len(points))
         self.last_time, self.last_points = t, points
         return True, f"{len(points)} corners"

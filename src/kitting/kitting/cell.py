@@ -205,7 +205,7 @@ class Cell:
     tray: Tray
     markers: List[Marker]
     camera: CameraSpec
-    gripper: Gripper = None
+    gripper: Gripper
     source: str = "<defaults>"
 
     @property

@@ -2,9 +2,8 @@
 format, as ``kitting.calibration.write_intrinsics_yaml`` writes and ROS's camera_calibration
 tool saves).
 
-- ``save_intrinsics_yaml(path, intrinsics)``: written atomically (``motion_common.
-  atomic_file.write_atomic``): a crash leaves the old file or the new one, never half.
-  The text is the one ``write_intrinsics_yaml`` produces (one format, one writer).
+- saving is ``kitting.calibration.write_intrinsics_yaml`` (atomic: a crash leaves the old
+  file or the new one, never half);
 - ``load_camera_info_yaml(path)`` -> ``sensor_msgs/CameraInfo`` with K, D, R, P, size and
   distortion model from the file (R defaults to I and P to [K | 0] when absent). A missing,
   unparsable or inconsistent file raises ``IntrinsicsFileError`` naming the file, the key
@@ -20,17 +19,11 @@ from typing import Callable, Optional
 from sensor_msgs.msg import CameraInfo
 
 
-from .calibration import Intrinsics, write_intrinsics_yaml
 from .image_msgs import intrinsics_from_camera_info
 
 
 class IntrinsicsFileError(Exception):
     """An intrinsics file that cannot be used; the message names the file and what to do."""
-
-
-def save_intrinsics_yaml(path: str, intrinsics: Intrinsics, camera_name: str = "kitting_camera") -> str:
-    """Write the camera_info YAML of ``intrinsics`` atomically; return the absolute path."""
-    return write_intrinsics_yaml(path, intrinsics, camera_name)
 
 
 def _matrix(data: dict, key: str, size: int, path: str, required: bool = True) -> Optional[list]:

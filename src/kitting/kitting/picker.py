@@ -281,10 +281,7 @@ class KittingPicker:
         velocity = track.velocity
         hover = np.r_[point - velocity * self.descent_time, top + P["hover_height"]]
         self._emit(track, "planned", f"intercept in {t_grasp - self.clock():.2f} s", np.r_[point, top])
-        start = self._face_now()
-        if start[2] < hover[2] - 1e-3:
-            self._move_l(np.r_[start[:2], hover[2]])
-        self._move_l(hover)
+        self._rise_then_move(hover)
         self._gripper(True)
         # Start the descent so that it ends when the part arrives (newest estimate).
         with self.lock:
@@ -342,10 +339,7 @@ class KittingPicker:
         floor = self.cell.tray.position[2]
         above = np.r_[slot.center[:2], self.cell.belt.height + P["transit_height"]]
         release = np.r_[slot.center[:2], floor + P["place_height"] + part.height]
-        start = self._face_now()
-        if start[2] < above[2] - 1e-3:
-            self._move_l(np.r_[start[:2], above[2]])
-        self._move_l(above)
+        self._rise_then_move(above)
         self._move_l(release)
         self._gripper(False)
         self.holding = None
@@ -355,11 +349,15 @@ class KittingPicker:
     def go_to_wait(self):
         """Tool to the wait position (MoveL at transit height first)."""
         P = self.params
-        target = np.asarray(P["wait_position"], float) - [0.0, 0.0, self.cell.gripper.tcp_length]
+        self._rise_then_move(np.asarray(P["wait_position"], float) - [0.0, 0.0, self.cell.gripper.tcp_length])
+
+    def _rise_then_move(self, face):
+        """MoveL of the magnet face to ``face``, straight up to its height first when below it
+        (never sideways low over the belt or the tray)."""
         start = self._face_now()
-        if start[2] < target[2] - 1e-3:
-            self._move_l(np.r_[start[:2], target[2]])
-        self._move_l(target)
+        if start[2] < face[2] - 1e-3:
+            self._move_l(np.r_[start[:2], face[2]])
+        self._move_l(face)
 
     def forget_finished(self):
         """Drop records of tracks the tracker has stopped (bounded memory)."""

@@ -23,12 +23,12 @@ from .parts import part_class
 BELT_RGBA = (0.16, 0.16, 0.18, 1.0)
 TRAY_RGBA = (0.25, 0.35, 0.55, 1.0)
 FLOOR_RGBA = (0.45, 0.45, 0.42, 1.0)
-QUIET_ZONE_CELLS = 1
+QUIET_ZONE_CELLS = 1   # white border around the marker, in marker cells
 # An object of no known class (the detector must reject it, the arm must never pick it):
 # a red plastic block, 40 x 30 x 20 mm.
 FOREIGN_CLASS = "foreign"
 FOREIGN_HALF_EXTENTS = (0.02, 0.015, 0.01)
-FOREIGN_RGBA = (0.8, 0.1, 0.1, 1.0)   # white border around the marker, in marker cells
+FOREIGN_RGBA = (0.8, 0.1, 0.1, 1.0)
 
 
 def marker_image(dictionary: str, marker_id: int, pixels_per_cell: int = 20) -> Tuple[np.ndarray, float]:

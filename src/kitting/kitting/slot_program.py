@@ -95,7 +95,7 @@ def slots_from_program(cell: Cell, program: Program, source: str,
     if not releases:
         raise SlotProgramError(f"{source}: no release waypoint; teach each slot by opening the hand over it "
                                "(the 'release' command)")
-    tcp_length = cell.gripper.tcp_length if cell.gripper is not None else 0.0
+    tcp_length = cell.gripper.tcp_length
     yaml_slots = {slot.part_class: slot for slot in cell.tray.slots}
     taught: Dict[str, Tuple[str, np.ndarray]] = {}
     for waypoint in releases:
