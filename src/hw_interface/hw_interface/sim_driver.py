@@ -201,10 +201,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                                    Result.NOT_CONNECTED)
 
     def get_robot_joints(self) -> np.ndarray:
-        with self._lock:
-            self._require_connection()
-            states = self._client.getJointStates(self._body, self._joint_indices)
-        return np.array([s[0] for s in states])
+        return self.joint_sample()[1]
 
     def joint_sample(self):
         """(wall-clock time of the physics step the joints come from, measured joints)."""
@@ -281,6 +278,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
     def _end_path(self, outcome) -> None:
         """Finish the running path with ``outcome`` (None: arrived); caller holds the lock."""
         self._path = None
+        self._follower.reset(self._target)  # a stream after the move starts where it ended
         self._path_outcome = outcome
         self._path_done.set()
 
@@ -412,7 +410,6 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 else:
                     elapsed = self._sim_time - self._path_start
                     self._target = self._path.sample(elapsed)
-                    self._follower.reset(self._target)  # a stream after the move starts here
                     if elapsed >= self._path.duration:
                         error = self._goal_error()
                         if error <= self.goal_tolerance:
@@ -420,7 +417,6 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                         elif elapsed - self._path.duration > self.settle_timeout:
                             self._target = np.array([s[0] for s in self._client.getJointStates(
                                 self._body, self._joint_indices)])
-                            self._follower.reset(self._target)
                             self._end_path((Result.DRIVER_FAULT, (
                                 f"the arm did not settle within {self.settle_timeout:g} s of the path's end: "
                                 f"{error:.4f} rad from the goal (tolerance {self.goal_tolerance:g} rad); "
@@ -428,7 +424,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 # One call per joint: only setJointMotorControl2 takes maxVelocity, which
                 # keeps the motor itself within the URDF limit (a servo lagging under
                 # gravity would otherwise catch up faster than the limit).
-                gain = getattr(self, "_gain", 0.6)
+                gain = 0.6   # pybullet positionGain, the same for every joint
                 forces = (self._efforts * 4.0).tolist()
                 for joint, target, force, speed in zip(self._joint_indices, self._target.tolist(), forces,
                                                        self._max_speeds):
