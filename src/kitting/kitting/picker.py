@@ -209,41 +209,43 @@ class KittingPicker:
 
     def run_once(self) -> Optional[KittingEvent]:
         """Pick and place the next part if there is one; the final event, or None."""
-        for track in self.candidates():
-            record = self.records.setdefault(track.track_id, _PartRecord())
-            now = self.clock()
-            start = self._face_now()
-            x_min, x_max = self.params["pick_window"]
-            plan = plan_intercept(track.position, track.velocity, track.t, now,
-                                  lambda point: self.reach_time(start, point), x_min, x_max,
-                                  margin=self.params["plan_margin"])
-            if not plan.ok:
-                record.done = True
-                return self._emit(track, "skipped", plan.reason)
-            record.attempts += 1
-            started = now
-            try:
-                event = self._pick_and_place(track, plan.time)
-            except PickAborted as exc:
-                if self.holding is None and self.magnet_on and exc.result:
-                    # Stopped with the magnet on: the part may hang from it. It stays on,
-                    # and the part is carried to its slot once the stop is released.
-                    self.holding = track
-                    record.done = True
-                    return self._emit(track, "failed", f"{exc.reason}; the magnet stays on: the part goes to "
-                                                       "its slot once the stop is released")
-                if self.holding is None and "missed" not in exc.reason:
-                    # Nothing held; after a suspected miss the magnet stays on instead (if
-                    # the part is held after all, it is never dropped onto the belt).
-                    self._release_quietly()
-                if exc.result or record.attempts >= self.params["max_attempts"] or "missed" not in exc.reason:
-                    record.done = exc.result == 0 or self.holding is not None
-                    return self._emit(track, "failed", exc.reason)
-                return self._emit(track, "missed", exc.reason)
+        candidates = self.candidates()   # the most downstream part first
+        if not candidates:
+            return None
+        track = candidates[0]
+        record = self.records.setdefault(track.track_id, _PartRecord())
+        now = self.clock()
+        start = self._face_now()
+        x_min, x_max = self.params["pick_window"]
+        plan = plan_intercept(track.position, track.velocity, track.t, now,
+                              lambda point: self.reach_time(start, point), x_min, x_max,
+                              margin=self.params["plan_margin"])
+        if not plan.ok:
             record.done = True
-            self.cycle_times.append(self.clock() - started)
-            return event
-        return None
+            return self._emit(track, "skipped", plan.reason)
+        record.attempts += 1
+        started = now
+        try:
+            event = self._pick_and_place(track, plan.time)
+        except PickAborted as exc:
+            if self.holding is None and self.magnet_on and exc.result:
+                # Stopped with the magnet on: the part may hang from it. It stays on,
+                # and the part is carried to its slot once the stop is released.
+                self.holding = track
+                record.done = True
+                return self._emit(track, "failed", f"{exc.reason}; the magnet stays on: the part goes to "
+                                                   "its slot once the stop is released")
+            if self.holding is None and "missed" not in exc.reason:
+                # Nothing held; after a suspected miss the magnet stays on instead (if
+                # the part is held after all, it is never dropped onto the belt).
+                self._release_quietly()
+            if exc.result or record.attempts >= self.params["max_attempts"] or "missed" not in exc.reason:
+                record.done = exc.result == 0 or self.holding is not None
+                return self._emit(track, "failed", exc.reason)
+            return self._emit(track, "missed", exc.reason)
+        record.done = True
+        self.cycle_times.append(self.clock() - started)
+        return event
 
     def _move_l(self, face, allowed_end: float = 0.0, check_from=None):
         """MoveL of the magnet face to ``face`` after checking the path against the cell."""
