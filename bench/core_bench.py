@@ -39,7 +39,7 @@ def stats(samples):
 
 def ik_benchmark(robot, paths, rng):
     """Warm-started IK along smooth joint-space paths (reachable by construction)."""
-    kin = RobotKinematics(os.path.join(ROOT, "src", "motion_commander", "urdf", f"{robot}.urdf"))
+    kin = RobotKinematics(os.path.join(ROOT, "src", "motion_common", "urdf", f"{robot}.urdf"))
     home = np.array(HOMES[robot])
     warm, cold, successes, steps = [], [], 0, 0
     for _ in range(paths):
@@ -66,7 +66,7 @@ def ik_benchmark(robot, paths, rng):
 
 def core_benchmark():
     """TeleopCore.on_hand_pose per frame on the sequenced real recordings (UR5e)."""
-    kin = RobotKinematics(os.path.join(ROOT, "src", "motion_commander", "urdf", "ur5e.urdf"))
+    kin = RobotKinematics(os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf"))
     per_frame, ik_only = [], []
     for name in RECORDINGS:
         recording = read_recording(os.path.join(ROOT, "tests", "data", f"{name}.jsonl.gz"))

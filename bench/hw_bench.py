@@ -31,7 +31,7 @@ def sim_real_time_factor(seconds):
     """Real-time factor of the pybullet driver in its real-time and free-running modes."""
     sys.path.insert(0, os.path.join(ROOT, "src", "hw_interface"))
     from hw_interface.sim_driver import PybulletSimDriver
-    urdf = os.path.join(ROOT, "src", "motion_commander", "urdf", "ur5e.urdf")
+    urdf = os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf")
     figures = {}
     for real_time in (True, False):
         sim = PybulletSimDriver(urdf, initial_joints=HOME, real_time=real_time)

@@ -125,6 +125,10 @@ class HandDevice(abc.ABC):
     params: ParamSchema = ParamSchema([])
     rate_hz: Optional[float] = None
     finite: bool = False            # True: a recording that ends (the node then reports ~finished and exits)
+    # True: the wrapper stamps each message as it publishes it. A recording has no moment of
+    # reception, so its frames are stamped where a live driver's would start their way
+    # through the framework: at the publish (the same point the transport floor starts at).
+    stamp_on_publish: bool = False
     default_frame_id: str = "device"
     wrapper_defaults: Dict[str, object] = {}   # the device's defaults for wrapper parameters
     # Extra latched std_msgs/Bool outputs: key -> topic; the device calls emit(key, value).

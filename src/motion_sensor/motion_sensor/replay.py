@@ -116,11 +116,17 @@ class ReplayDevice(HandDevice):
     name = "replay"
     default_frame_id = "leap"
     finite = True
+    stamp_on_publish = True
     wrapper_defaults = {"min_subscribers": 1}  # never play to nobody
     params = ParamSchema([
         Param("recording", "", doc="Leap v6 .jsonl(.gz), rosbag of motion_sensor/hand (.bag) or CSV (.csv)"),
         Param("rate", 1.0, low=0, doc="speed factor: 1 the recorded timing, 0 as fast as possible"),
         Param("loop", False, doc="start again at the end (the node then never finishes)"),
+        Param("repeat", 1, low=1, high=1000,
+              doc="passes over the recording when not looping, each after a pause with no hand (as an operator "
+                  "who lowers the hand and starts again); the node finishes after the last"),
+        Param("repeat_pause", 0.5, unit="s", low=0, high=60,
+              doc="pause between passes; at least the sequencer's hand_lost_s, so each pass is a new entry"),
         Param("start_offset", 0.0, unit="s", low=0, doc="seconds into the recording to start from"),
         Param("primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"),
     ])
@@ -135,11 +141,13 @@ class ReplayDevice(HandDevice):
         self.counters["rejected"] += len(self._rejected)
         self._schedule = None
         self._start = None
+        self._passes_left = self.config["repeat"]
 
     def describe(self) -> str:
         return f"replay of {self.config['recording']}"
 
     def open(self) -> None:
+        self._passes_left = self.config["repeat"]
         if self._rejected is not None:
             for problem in self._rejected[:5]:
                 self.warn(f"{self.config['recording']}: {problem}")
@@ -157,6 +165,12 @@ class ReplayDevice(HandDevice):
         step = next(self._schedule, None)
         if step is None and self.config["loop"]:
             self.counters["loops"] += 1
+            self._restart()
+            step = next(self._schedule, None)
+        elif step is None and self._passes_left > 1:
+            self._passes_left -= 1
+            self.counters["passes"] += 1
+            self.sleep(self.config["repeat_pause"])
             self._restart()
             step = next(self._schedule, None)
         if step is None:
