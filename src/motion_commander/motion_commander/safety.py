@@ -70,45 +70,57 @@ class JointStepLimiter:
         self._target_velocity = None if self._target is None else (target - self._target) / dt
         self._target = target
 
-    def _max_step(self, previous, goal, dt: float, speed_fraction: float):
+    def _clamped_dt(self, dt: float) -> float:
+        return min(max(float(dt), self.min_dt), self.max_dt)
+
+    def _max_step(self, previous: np.ndarray, goal: np.ndarray, dt: float, speed_fraction: float):
         """Largest joint step (abs, per joint) allowed toward ``goal`` this step."""
-        max_step = self.max_velocity * dt * max(speed_fraction, 0.0)
+        max_step = self.max_velocity * (dt * max(speed_fraction, 0.0))
         if self.max_acceleration is None:
             return max_step
-        error = np.asarray(goal, dtype=float) - np.asarray(previous, dtype=float)
+        direction = goal - previous
+        error = direction
         # Slow enough to stop where the goal itself would stop if it braked as hard as we
         # may: a goal moving on at v stops v^2/2a further on (so we keep pace), a goal
         # slowing down for a reversal brings that point back to its peak (so we brake in
         # time), and a goal already coming back leaves no distance at all (so we brake now).
         if self._target_velocity is not None:
             v = self._target_velocity
-            error = error + v * np.abs(v) / (2.0 * self.max_acceleration)
-        room = np.maximum(error * np.sign(np.asarray(goal, dtype=float) - np.asarray(previous, dtype=float)), 0.0)
+            error = direction + v * np.abs(v) / (2.0 * self.max_acceleration)
+        room = np.maximum(error * np.sign(direction), 0.0)
         return np.minimum(max_step, braking_speed(room, self.max_acceleration, dt) * dt)
 
     def overshoot(self, previous, target, dt: float, speed_fraction: float = 1.0, goal=None) -> float:
         """How many times too large the step to ``target`` is for the velocity limit and,
         with an acceleration limit, for stopping at ``goal`` (default: target) (<= 1:
         allowed as is). No side effect."""
-        dt = float(np.clip(dt, self.min_dt, self.max_dt))
-        step = np.abs(np.asarray(target, dtype=float) - np.asarray(previous, dtype=float))
-        max_step = self._max_step(previous, target if goal is None else goal, dt, speed_fraction)
-        if np.any((max_step <= 0) & (step > 0)):
-            return float("inf")
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return float(np.max(np.where(max_step > 0, step / max_step, 0.0)))
+        # Runs on every teleop frame: plain float and array operations, no np.clip or
+        # np.errstate (their call overhead is larger than this arithmetic).
+        previous = np.asarray(previous, dtype=float)
+        target = np.asarray(target, dtype=float)
+        goal = target if goal is None else np.asarray(goal, dtype=float)
+        step = np.abs(target - previous)
+        max_step = self._max_step(previous, goal, self._clamped_dt(dt), speed_fraction)
+        blocked = max_step <= 0
+        if blocked.any():
+            if (step[blocked] > 0).any():
+                return float("inf")
+            max_step = np.where(blocked, np.inf, max_step)  # nothing to do there: ratio 0
+        return float((step / max_step).max())
 
-    def limit(self, previous, target, dt: float, speed_fraction: float = 1.0, goal=None):
+    def limit(self, previous, target, dt: float, speed_fraction: float = 1.0, goal=None, ratio=None):
         """Return (command, limited): previous moved toward target within the limits.
 
         ``speed_fraction`` in [0, 1] scales the velocity limit (ramps, singularity slow-down).
         ``goal`` is where the motion must be able to stop (default: target); the core
         passes the frame's full IK target when ``target`` is a partial step toward it.
+        ``ratio`` is this same step's ``overshoot()``, when the caller has computed it.
         """
         previous = np.asarray(previous, dtype=float)
         step = np.asarray(target, dtype=float) - previous
-        dt = float(np.clip(dt, self.min_dt, self.max_dt))
-        ratio = self.overshoot(previous, target, dt, speed_fraction, goal)
+        dt = self._clamped_dt(dt)
+        if ratio is None:
+            ratio = self.overshoot(previous, target, dt, speed_fraction, goal)
         limited = ratio > 1.0
         if limited:
             step = step / ratio if np.isfinite(ratio) else np.zeros_like(step)

@@ -91,6 +91,8 @@ class TeleopCore:
         self.measured_joints: Optional[np.ndarray] = None
         self.estopped = False
         self._command: Optional[np.ndarray] = None
+        # Jacobian condition number at _command (None: not known yet); see _command_for.
+        self._command_condition: Optional[float] = None
         self._command_stamp: Optional[float] = None
         self._halted = False
 
@@ -168,6 +170,7 @@ class TeleopCore:
     # -- internals -------------------------------------------------------------------------
     def _restart(self, stamp: float) -> None:
         self._command = self.measured_joints.copy()
+        self._command_condition = None
         self._command_stamp = stamp
         self._halted = False
         self.limiter.reset()
@@ -197,8 +200,10 @@ class TeleopCore:
         fraction = self.ramp.fraction(stamp)
         if fraction < 1.0:
             flags.append(TeleopStatus.RAMPING)
-        singular = self.singularity.speed_fraction(condition_number(self.kinematics.jacobian(self._command)),
-                                                   condition_number(self.kinematics.jacobian(joints)))
+        if self._command_condition is None:
+            self._command_condition = condition_number(self.kinematics.jacobian(self._command))
+        target_condition = condition_number(self.kinematics.jacobian(joints))
+        singular = self.singularity.speed_fraction(self._command_condition, target_condition)
         if singular < 1.0:
             flags.append(TeleopStatus.SINGULARITY_HALT if singular == 0.0 else TeleopStatus.SINGULARITY_SLOWDOWN)
         speed = min(fraction, singular)
@@ -206,14 +211,20 @@ class TeleopCore:
         goal = joints
         self.limiter.observe_target(goal, dt)
         overshoot = self.limiter.overshoot(self._command, joints, dt, speed)
-        if 1.0 < overshoot < float("inf"):
+        partial = 1.0 < overshoot < float("inf")
+        if partial:
             # Too far for one step: aim at the point 1/overshoot of the way along the
             # Cartesian path instead of cutting straight through joint space, which can
             # swing the tool far off the path when the IK solution moved a lot.
             joints = self._partial_step(target_position, target_orientation, 1.0 / overshoot, joints)
-        joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal)
+            joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal)
+        else:  # the step to the IK target itself: its overshoot is known
+            joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal, ratio=overshoot)
         if limited and not flags:
             flags.append(TeleopStatus.JOINT_SPEED_LIMITED)
+        # The condition number at the new command is known when it is the IK target itself;
+        # otherwise the next frame computes it (one Jacobian SVD instead of two per frame).
+        self._command_condition = None if (partial or limited) else target_condition
         self._command = joints
         self._command_stamp = stamp
         self.watchdog.commanded(now)

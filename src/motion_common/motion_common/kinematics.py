@@ -1,5 +1,6 @@
 """Robot kinematics from a URDF with pinocchio: forward kinematics, Jacobians and
 damped-least-squares inverse kinematics warm-started from the current joints."""
+import math
 import os
 from dataclasses import dataclass
 from typing import Optional
@@ -127,21 +128,28 @@ class RobotKinematics:
         Each step is clipped to the joint limits, so the result is always inside them; when
         the target is unreachable the closest solution found is returned with success False.
         """
-        q = np.clip(np.asarray(seed, dtype=float), self.lower, self.upper)
+        # This runs once or twice per teleop frame, on the latency-critical path: plain
+        # dot products and preallocated arrays, since numpy's per-call overhead (norm, clip,
+        # eye) costs more than the 6x6 arithmetic itself.
+        model, data, tool_id, lower, upper = self.model, self.data, self.tool_id, self.lower, self.upper
+        q = np.minimum(np.maximum(np.asarray(seed, dtype=float), lower), upper)
+        damping_eye = damping * np.eye(6)
+        position_limit, rotation_limit = position_tolerance ** 2, rotation_tolerance ** 2
         error = np.zeros(6)
         for iteration in range(max_iterations + 1):
-            pin.framesForwardKinematics(self.model, self.data, q)
-            current_to_target = self.data.oMf[self.tool_id].actInv(target)
+            pin.framesForwardKinematics(model, data, q)
+            current_to_target = data.oMf[tool_id].actInv(target)
             error = pin.log6(current_to_target).vector
-            if np.linalg.norm(error[:3]) < position_tolerance and np.linalg.norm(error[3:]) < rotation_tolerance:
-                return IkResult(q, True, float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:])), iteration)
+            linear, angular = error[:3], error[3:]
+            if linear @ linear < position_limit and angular @ angular < rotation_limit:
+                return IkResult(q, True, math.sqrt(linear @ linear), math.sqrt(angular @ angular), iteration)
             if iteration == max_iterations:
                 break
-            jac = pin.computeFrameJacobian(self.model, self.data, q, self.tool_id, pin.LOCAL)
+            jac = pin.computeFrameJacobian(model, data, q, tool_id, pin.LOCAL)
             jac = pin.Jlog6(current_to_target.inverse()) @ jac
             # Damping keeps the step bounded near singularities instead of exploding.
-            step = jac.T @ np.linalg.solve(jac @ jac.T + damping * np.eye(6), error)
-            q = np.clip(pin.integrate(self.model, q, step), self.lower, self.upper)
+            step = jac.T @ np.linalg.solve(jac @ jac.T + damping_eye, error)
+            q = np.minimum(np.maximum(pin.integrate(model, q, step), lower), upper)
         return IkResult(q, False, float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:])), max_iterations)
 
     def line_path(self, start_joints, goal_position, goal_orientation, max_step: float = 0.005,

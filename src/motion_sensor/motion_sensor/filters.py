@@ -44,7 +44,8 @@ class MeanFilter:
         del stamp  # a moving average is rate-blind by definition
         self._positions.append(np.asarray(position, dtype=float))
         self._orientations.append(np.asarray(orientation, dtype=float))
-        return np.mean(self._positions, axis=0), average_quaternions(np.array(self._orientations))
+        # sum()/len: a dozen 3-vector additions cost less than np.mean's array building.
+        return sum(self._positions) / len(self._positions), average_quaternions(np.array(self._orientations))
 
 
 FILTERS = {"mean": MeanFilter}

@@ -16,6 +16,7 @@ Stages, in order, each counting what it drops (``counters``, by reason):
 7. filtering (mean, kalman or one_euro), then a continuity offset so that device switches
    and accepted jumps never make the output jump.
 """
+import math
 from collections import Counter, deque
 from dataclasses import dataclass, field
 from typing import Dict, Optional
@@ -138,15 +139,26 @@ class SequencedPose:
     device: str = ""
 
 
+def _floats(values, length: int):
+    """``values`` as a list of ``length`` floats, or None when it is not that."""
+    try:
+        values = [float(v) for v in values]
+    except (TypeError, ValueError):  # not a flat sequence of numbers (e.g. nested)
+        return None
+    return values if len(values) == length else None
+
+
 def validate_sample(sample: HandSample) -> Optional[str]:
     """Return why ``sample`` is unusable, or None when it is fine."""
-    position = np.asarray(sample.position, dtype=float)
-    orientation = np.asarray(sample.orientation, dtype=float)
-    if position.shape != (3,) or orientation.shape != (4,):
+    # Every frame passes here on the latency-critical path: plain floats and math, since
+    # numpy's per-call overhead on 3- and 4-vectors costs more than the checks themselves.
+    position = _floats(sample.position, 3)
+    orientation = _floats(sample.orientation, 4)
+    if position is None or orientation is None:
         return "malformed"
-    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(orientation)) and np.isfinite(sample.stamp)):
+    if not all(map(math.isfinite, position + orientation)) or not math.isfinite(sample.stamp):
         return "non_finite"
-    if abs(np.linalg.norm(orientation) - 1.0) > UNIT_QUATERNION_TOLERANCE:
+    if abs(math.sqrt(sum(v * v for v in orientation)) - 1.0) > UNIT_QUATERNION_TOLERANCE:
         return "non_unit_quaternion"
     if sample.hands_num != len(sample.hand_types):
         return "hands_num_mismatch"
@@ -154,11 +166,11 @@ def validate_sample(sample: HandSample) -> Optional[str]:
         return "bad_stamp"
     for value in (sample.confidence, sample.grab_strength, sample.pinch_strength):
         # 0-1, or the documented unknown value -1.
-        if not (np.isfinite(value) and (value == -1.0 or 0.0 <= value <= 1.0)):
+        if not (math.isfinite(value) and (value == -1.0 or 0.0 <= value <= 1.0)):
             return "bad_hand_field"
     if sample.index_tip is not None:
-        tip = np.asarray(sample.index_tip, dtype=float)
-        if tip.shape != (3,) or not np.all(np.isfinite(tip)):
+        tip = _floats(sample.index_tip, 3)
+        if tip is None or not all(map(math.isfinite, tip)):
             return "bad_hand_field"
     return None
 
