@@ -147,8 +147,8 @@ class JointLimitMargin:
     def apply(self, joints):
         """Return (clipped joints, whether any joint was clipped)."""
         q = np.asarray(joints, dtype=float)
-        clipped = np.clip(q, self.lower, self.upper)
-        return clipped, bool(np.any(clipped != q))
+        clipped = np.minimum(np.maximum(q, self.lower), self.upper)  # np.clip's dispatch costs more
+        return clipped, bool((clipped != q).any())
 
 
 class SingularityGuard:
@@ -198,14 +198,15 @@ class WorkspaceFence:
         self.upper = np.asarray(self.upper, dtype=float)
         if self.lower.shape != (3,) or self.upper.shape != (3,) or np.any(self.lower >= self.upper):
             raise MotionCommanderError("workspace box needs lower < upper, 3 values each (m)")
+        # The box's lower corner raised to the floor, once (clamp runs on every frame).
+        self._floored_lower = self.lower.copy()
+        self._floored_lower[2] = max(self._floored_lower[2], self.floor_z)
 
     def clamp(self, position):
         """Return (position clamped into the fence, whether it was outside)."""
         p = np.asarray(position, dtype=float)
-        lower = self.lower.copy()
-        lower[2] = max(lower[2], self.floor_z)
-        clamped = np.clip(p, lower, self.upper)
-        return clamped, bool(np.any(clamped != p))
+        clamped = np.minimum(np.maximum(p, self._floored_lower), self.upper)
+        return clamped, bool((clamped != p).any())
 
 
 class EngageRamp:
@@ -226,7 +227,7 @@ class EngageRamp:
         if self._start is None or self.duration == 0:
             return 1.0
         # Never zero: a tiny first step lets the ramp start moving at all.
-        return float(np.clip((stamp - self._start) / self.duration, 0.02, 1.0))
+        return min(max((stamp - self._start) / self.duration, 0.02), 1.0)
 
 
 class StaleCommandWatchdog:

@@ -37,6 +37,8 @@ class TeleopMapper:
         # Rotation matrices, not scipy Rotation objects: this runs on every frame and
         # matrix products cost a microsecond where Rotation objects cost tens.
         self.hand_to_robot = rotation
+        # The common case (device axes = base axes) skips three matrix products per frame.
+        self._aligned = bool(np.array_equal(rotation, np.eye(3)))
         self.follow_orientation = follow_orientation
         self._hand_ref = None
         self._tool_ref = None
@@ -83,15 +85,18 @@ class TeleopMapper:
         hand_p0, hand_r0 = self._hand_ref
         tool_p0, tool_r0 = self._tool_ref
         self._last_hand = np.asarray(hand_position, dtype=float)
-        displacement = self.hand_to_robot @ (self._last_hand - hand_p0)
+        displacement = self._last_hand - hand_p0
+        if not self._aligned:
+            displacement = self.hand_to_robot @ displacement
         position = tool_p0 + self.speed_ratio * displacement
         if not self.follow_orientation:
             return position, matrix_to_quat(tool_r0)
         # The hand's rotation since engage, re-expressed in the robot base frame, is applied
         # to the tool in the base frame, so turning the hand turns the tool the same way.
         delta = quat_to_matrix(hand_orientation) @ hand_r0.T
-        delta_robot = self.hand_to_robot @ delta @ self.hand_to_robot.T
-        return position, matrix_to_quat(delta_robot @ tool_r0)
+        if not self._aligned:
+            delta = self.hand_to_robot @ delta @ self.hand_to_robot.T
+        return position, matrix_to_quat(delta @ tool_r0)
 
 
 class AutoClutch:
