@@ -170,16 +170,18 @@ def start_session(pair, recording, watchers=(), robot_args=(), sensor_args=()):
     return procs
 
 
-def run_monitored_session(recording, log_dir, port=PORT, timeout=180.0):
-    """One recording across the link with session_monitor on the robot side; its summary dict."""
+def run_monitored_session(recording, log_dir, port=PORT, timeout=180.0, repeat=1):
+    """One recording (``repeat`` passes) across the link with session_monitor on the robot
+    side; its summary dict."""
     out = os.path.join(log_dir, "output")
     os.makedirs(out, exist_ok=True)
     with TwoMachines(log_dir, port) as pair:
         monitor, = start_session(pair, recording, watchers=[(
             "session_monitor", ["rosrun", "motion_commander", "session_monitor", f"_output_dir:={out}",
-                                "_title:=two machines, " + os.path.basename(recording)])])
+                                "_title:=two machines, " + os.path.basename(recording)])],
+            sensor_args=[f"repeat:={repeat}"])
         try:
-            code = monitor.wait(timeout=timeout)
+            code = monitor.wait(timeout=timeout * repeat)
         except subprocess.TimeoutExpired:
             raise RuntimeError(f"session_monitor did not report within {timeout:.0f} s:\n"
                                + pair.log_tail("session_monitor") + pair.log_tail("sensing")) from None

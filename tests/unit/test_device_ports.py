@@ -167,3 +167,28 @@ def test_device_executables_are_three_lines():
         with open(os.path.join(ROOT, "src", "motion_sensor", "nodes", node), encoding="utf-8") as fh:
             code = [line for line in fh.read().split('"""')[-1].splitlines() if line.strip()]
         assert len(code) <= 5 and any("run_device_node" in line for line in code), node
+
+
+def test_replay_repeat_plays_passes_with_a_hand_absent_pause_then_finishes():
+    clock = FakeClock(1000.0)
+    frames = read_recording(WAVE).frames
+    duration = frames[-1].timestamp - frames[0].timestamp
+    device = ReplayDevice(config(ReplayDevice, recording=WAVE, repeat=3, repeat_pause=0.5), clock=clock,
+                          sleep=clock.sleep)
+    finished, published, _ = run(device, clock)
+    assert finished and len(published) == 3 * len(frames) and device.counters["passes"] == 2
+    stamps = np.array([s.stamp for s in published])
+    # Each new pass starts after the pause, with no frame in between: the sequencer sees the
+    # hand leave (a gap longer than its hand_lost_s) and enter again.
+    gaps = np.diff(stamps)
+    starts = np.flatnonzero(gaps > 0.4)
+    assert list(starts) == [len(frames) - 1, 2 * len(frames) - 1]
+    assert gaps[starts] == pytest.approx([0.5, 0.5], abs=0.02)
+    assert stamps[-1] - stamps[0] == pytest.approx(3 * duration + 1.0, abs=0.05)
+
+
+def test_replay_is_stamped_on_publish_and_live_devices_are_not():
+    # A recording has no reception time: the node stamps it as it publishes it. A live
+    # device keeps the stamp of the moment its frame arrived.
+    assert ReplayDevice.stamp_on_publish is True
+    assert LeapDevice.stamp_on_publish is False and SpaceMouseDevice.stamp_on_publish is False

@@ -3,6 +3,7 @@ import sys
 import time
 
 import numpy as np
+import pybullet
 import pytest
 
 from conftest import HOME, UR5E
@@ -102,5 +103,39 @@ def test_sim_runs_every_shipped_robot(robot, home):
         np.testing.assert_allclose(position, expected, atol=2e-3)  # pybullet and pinocchio agree
         sim.move_l(position + [0.05, 0.05, -0.05], orientation)
         np.testing.assert_allclose(sim.get_robot_cartesian_position()[0], position + [0.05, 0.05, -0.05], atol=2e-3)
+    finally:
+        sim.disconnect()
+
+
+def test_sim_state_is_read_once_per_physics_step_and_never_stale():
+    sim = PybulletSimDriver(UR5E, initial_joints=HOME, real_time=False)
+    sim.login()
+    try:
+        sim.move_j(np.asarray(HOME) + 0.3)
+        # Hold the physics still (the step thread ends), so the cache is tested step by step.
+        sim._running.clear()
+        sim._thread.join(timeout=5.0)
+
+        def pybullet_joints():
+            return np.array([s[0] for s in sim._client.getJointStates(sim._body, sim._joint_indices)])
+        stamp, joints = sim.joint_sample()
+        np.testing.assert_array_equal(joints, pybullet_joints())
+        joints[:] = 99.0  # a caller changing its copy must not change the cache
+        assert sim.joint_sample() == (stamp, pytest.approx(pybullet_joints()))
+        position, orientation = sim.get_robot_cartesian_position()
+        # A new step invalidates both caches.
+        sim._client.setJointMotorControlArray(sim._body, sim._joint_indices, pybullet.VELOCITY_CONTROL,
+                                              targetVelocities=[1.0] * 6, forces=[500.0] * 6)
+        sim._client.stepSimulation()
+        with sim._lock:
+            sim.steps += 1
+        assert np.max(np.abs(sim.joint_sample()[1] - joints)) > 0
+        np.testing.assert_array_equal(sim.joint_sample()[1], pybullet_joints())
+        assert np.linalg.norm(sim.get_robot_cartesian_position()[0] - position) > 0
+        # A scene reset moves the arm without a step: the next read is the reset pose.
+        sim.reset_scene()
+        np.testing.assert_allclose(sim.joint_sample()[1], HOME, atol=1e-12)
+        start_position, _ = PybulletSimDriver(UR5E, initial_joints=HOME).kinematics.forward_pose(HOME)
+        np.testing.assert_allclose(sim.get_robot_cartesian_position()[0], start_position, atol=1e-4)
     finally:
         sim.disconnect()

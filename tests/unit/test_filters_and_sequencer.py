@@ -71,6 +71,10 @@ def test_sequencer_passes_good_frames_and_counts():
     (dict(orientation=(0, 0, 0, 2.0)), "non_unit_quaternion"),
     (dict(orientation=(0, 0, 0, 0)), "non_unit_quaternion"),
     (dict(hands_num=2), "hands_num_mismatch"),
+    (dict(position=(0.0, 0.1)), "malformed"),
+    (dict(position=np.zeros((3, 1))), "malformed"),
+    (dict(orientation=(0, 0, np.inf, 1)), "non_finite"),
+    (dict(position=(0, 0, 0.2, 0.1)), "malformed"),
 ])
 def test_sequencer_drops_bad_frames(bad, reason):
     seq = plain()
@@ -241,3 +245,10 @@ def test_bad_gesture_fields_are_dropped_and_counted():
                          ("index_tip", np.array([np.inf, 0, 0]))]:
         bad = HandSample(stamp=1.0, position=np.zeros(3), orientation=np.array([0, 0, 0, 1.0]), **{field: value})
         assert validate_sample(bad) == "bad_hand_field", field
+
+
+def test_sequencer_drops_non_numeric_fields_as_malformed():
+    seq = plain()
+    bad = sample(10.0)
+    bad.orientation = ["a", 0, 0, 1]  # as a hand-built sample might carry
+    assert seq.process(bad, now=10.0) is None and seq.counters["dropped_malformed"] == 1

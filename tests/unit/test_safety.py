@@ -208,3 +208,35 @@ def test_limiter_keeps_pace_with_a_target_moving_at_constant_speed():
         limiter.observe_target([target], dt)
         command = float(limiter.limit([command], [target], dt)[0][0])
     assert target - command < 0.01, f"lags {target - command:.4f} rad behind a 1 rad/s target"
+
+
+def test_carried_condition_number_gives_the_same_commands_as_recomputing_it():
+    # The core carries the Jacobian condition number of an unlimited command to the next
+    # frame instead of recomputing it; the commands must be exactly those of recomputing.
+    import os
+
+    from conftest import DATA
+    from motion_sensor.leap_v6 import frame_to_sample, read_recording
+    from motion_sensor.sequencer import Sequencer
+    frames = read_recording(os.path.join(DATA, "test-paddle-rightwards.jsonl.gz")).frames
+    runs = []
+    for recompute in (False, True):
+        core = make_core(joint_speed_scale=1.0, joint_acceleration=200.0)
+        sequencer, commands, carried = Sequencer(), [], 0
+        for frame in frames:
+            sample = frame_to_sample(frame, frame.timestamp)
+            pose = None if sample is None else sequencer.process(sample, now=frame.timestamp)
+            if pose is None:
+                continue
+            if recompute:
+                core._command_condition = None
+            elif core._command_condition is not None:
+                carried += 1
+            command = core.on_hand_pose(pose.stamp, pose.position, pose.orientation)
+            if command is not None:
+                commands.append(command.joints)
+                core.on_joint_state(command.joints)
+        runs.append((np.array(commands), carried))
+    (carried_run, carried_frames), (recomputed_run, _) = runs
+    assert len(carried_run) > 300 and carried_frames > 100, "the cache was never used: the test shows nothing"
+    np.testing.assert_allclose(carried_run, recomputed_run, rtol=0, atol=1e-9)

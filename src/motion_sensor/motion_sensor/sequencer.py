@@ -141,6 +141,8 @@ class SequencedPose:
 
 def _floats(values, length: int):
     """``values`` as a list of ``length`` floats, or None when it is not that."""
+    if getattr(values, "shape", (length,)) != (length,):  # an array of another shape (e.g. 3x1)
+        return None
     try:
         values = [float(v) for v in values]
     except (TypeError, ValueError):  # not a flat sequence of numbers (e.g. nested)
