@@ -252,3 +252,23 @@ def test_sequencer_drops_non_numeric_fields_as_malformed():
     bad = sample(10.0)
     bad.orientation = ["a", 0, 0, 1]  # as a hand-built sample might carry
     assert seq.process(bad, now=10.0) is None and seq.counters["dropped_malformed"] == 1
+
+
+def test_quaternion_mean_matches_the_exact_eigenvector_clustered_or_spread():
+    # The power iteration must give Markley's mean (the exact principal eigenvector, as
+    # numpy's eigh gives it) for the tight clusters of a real stream, and fall back to the
+    # exact solver when the quaternions are spread so widely that it would not converge.
+    rng = np.random.default_rng(3)
+    for spread in (0.001, 0.05, 0.3, 3.0):
+        for _ in range(50):
+            base = rng.normal(size=4)
+            quats = base / np.linalg.norm(base) + spread * rng.normal(size=(10, 4))
+            quats /= np.linalg.norm(quats, axis=1)[:, None]
+            quats[rng.random(10) < 0.3] *= -1  # q and -q are the same rotation
+            _, vectors = np.linalg.eigh(quats.T @ quats)
+            exact = vectors[:, -1] * np.sign(vectors[:, -1] @ quats[-1])
+            np.testing.assert_allclose(average_quaternions(quats), exact, atol=1e-9)
+    # Two opposite halves: no principal direction at all (equal eigenvalues) -> the exact
+    # solver answers, and the answer is still a unit quaternion.
+    pair = np.array([[0.0, 0.0, 0.0, 1.0]] * 5 + [[1.0, 0.0, 0.0, 0.0]] * 5)
+    assert np.linalg.norm(average_quaternions(pair)) == pytest.approx(1.0)

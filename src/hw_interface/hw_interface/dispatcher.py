@@ -218,13 +218,15 @@ class CommandDispatcher:
     def _check_joints(self, command, joints, dof):
         if len(joints) != dof:
             return Result.WRONG_LENGTH, f"joints needs {dof} values for this robot, got {len(joints)}"
+        # Every streamed command passes here: ndarray methods (.all, .any, .max) rather than
+        # the np.* wrappers, whose dispatch costs more than these 6-element checks.
         q = np.asarray(joints, dtype=float)
-        if not np.all(np.isfinite(q)):
+        if not np.isfinite(q).all():
             return Result.NOT_FINITE, f"joints contains NaN or inf: {q.tolist()}"
         lower, upper = self.driver.joint_limits
-        outside = np.flatnonzero((q < lower) | (q > upper))
-        if outside.size:
-            names = [self.driver.joint_names[i] for i in outside]
+        outside = (q < lower) | (q > upper)
+        if outside.any():
+            names = [self.driver.joint_names[i] for i in np.flatnonzero(outside)]
             return Result.JOINT_LIMIT, f"joints {names} outside their limits"
         if command == CommandIndex.SET_JOINTS:
             current = self.driver.get_robot_joints()
@@ -232,11 +234,11 @@ class CommandDispatcher:
                 fresh = self._clock() - self._stream_time <= STREAM_REFERENCE_TIMEOUT
                 reference = self._stream_reference if fresh and self._stream_reference is not None else None
             against = "the last streamed target" if reference is not None else "the robot"
-            step = float(np.max(np.abs(q - (current if reference is None else reference))))
+            step = float(np.abs(q - (current if reference is None else reference)).max())
             if step > self.max_stream_step:
                 return Result.TOO_FAR, (f"SET_JOINTS target is {step:.3f} rad from {against} (limit "
                                         f"{self.max_stream_step:.3f}); use MOVE_J for large motions")
-            lag = float(np.max(np.abs(q - current)))
+            lag = float(np.abs(q - current).max())
             if lag > self.max_stream_lag:
                 return Result.TOO_FAR, (f"SET_JOINTS target is {lag:.3f} rad ahead of the robot (limit "
                                         f"{self.max_stream_lag:.3f}): the robot is not following the stream; "

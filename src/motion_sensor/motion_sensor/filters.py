@@ -1,5 +1,6 @@
 """Pose filters of the sequencer. Positions are filtered in R^3, orientations on the unit
 sphere: quaternions are never averaged component-wise and published un-normalised."""
+import math
 from collections import deque
 
 import numpy as np
@@ -16,12 +17,38 @@ def average_quaternions(quats: np.ndarray) -> np.ndarray:
     each quaternion (q and -q are the same rotation), so no sign alignment can go wrong.
     """
     quats = np.asarray(quats, dtype=float)
-    _, vectors = np.linalg.eigh(quats.T @ quats)
-    mean = vectors[:, -1]
+    gram = quats.T @ quats
+    mean = _principal_vector(gram, quats[-1])
+    if mean is None:  # no clear principal direction (quaternions spread widely): exact solver
+        _, vectors = np.linalg.eigh(gram)
+        mean = vectors[:, -1]
     # Keep the sign of the newest sample so consecutive outputs do not flip sign.
-    if np.dot(mean, quats[-1]) < 0:
+    if mean @ quats[-1] < 0:
         mean = -mean
-    return mean / np.linalg.norm(mean)
+    return mean / math.sqrt(mean @ mean)
+
+
+def _principal_vector(gram: np.ndarray, start: np.ndarray, iterations: int = 50):
+    """Principal eigenvector of the 4x4 ``gram`` by power iteration from ``start``, or None
+    when it has not converged within ``iterations``.
+
+    Frames of one hand a few milliseconds apart are close rotations, so the principal
+    eigenvalue dwarfs the others and a handful of iterations reach float precision. This
+    runs on every frame of the stream, and a few 4x4 products cost less there than LAPACK's
+    eigh, whose large code is cold after the pause between two frames (bench/e2e_latency).
+    """
+    v = start / math.sqrt(start @ start)
+    for _ in range(iterations):
+        w = gram @ v
+        norm = math.sqrt(w @ w)
+        if norm == 0.0:
+            return None
+        w = w / norm
+        change = w - v
+        v = w
+        if change @ change < 1e-24:
+            return v
+    return None
 
 
 class MeanFilter:

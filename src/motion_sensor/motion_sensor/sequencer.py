@@ -349,8 +349,9 @@ class Sequencer:
             self._last_accepted = (sample.stamp, position, orientation)
             return False
         stamp, last_position, last_orientation = self._last_accepted
-        distance = float(np.linalg.norm(position - last_position))
-        angle = 2.0 * float(np.arccos(min(abs(float(np.dot(orientation, last_orientation))), 1.0)))
+        moved = position - last_position
+        distance = math.sqrt(moved @ moved)
+        angle = 2.0 * math.acos(min(abs(float(orientation @ last_orientation)), 1.0))
         quick = sample.stamp - stamp <= self.config.jump_window_s
         if quick and (distance > self.config.jump_distance_m or angle > self.config.jump_angle_rad):
             # A real move shows up as frames that agree with each other at the new place.
@@ -377,7 +378,7 @@ class Sequencer:
             self._continuity_pending = False
         position = position + self._offset_position
         orientation = _quat_multiply(self._offset_rotation, orientation)
-        orientation = orientation / np.linalg.norm(orientation)
+        orientation = orientation / math.sqrt(orientation @ orientation)
         out = SequencedPose(sample.stamp, position, orientation, sample.frame_id, sample.primary_type,
                             sample.hands_num, sample.device)
         self._last_output = out
