@@ -91,8 +91,13 @@ class TeleopCore:
         self.measured_joints: Optional[np.ndarray] = None
         self.estopped = False
         self._command: Optional[np.ndarray] = None
-        # Jacobian condition number at _command (None: not known yet); see _command_for.
+        # Jacobian condition number and tool pose at _command (None: not known yet); the
+        # first is carried from the frame that chose the command, both are filled between
+        # frames by prepare_next(), so the next frame does not spend its latency on them.
         self._command_condition: Optional[float] = None
+        self._command_pose = None
+        # The previous frame's IK solution (the unlimited goal): the next IK starts there.
+        self._last_goal: Optional[np.ndarray] = None
         self._command_stamp: Optional[float] = None
         self._halted = False
 
@@ -171,14 +176,29 @@ class TeleopCore:
     def _restart(self, stamp: float) -> None:
         self._command = self.measured_joints.copy()
         self._command_condition = None
+        self._command_pose = None
+        self._last_goal = None
         self._command_stamp = stamp
         self._halted = False
         self.limiter.reset()
         self.ramp.start(stamp)
 
+    def prepare_next(self) -> None:
+        """Compute, between frames, what the next frame needs about the current command (its
+        Jacobian condition number and tool pose), so that the next frame's command leaves
+        sooner. Optional: the next frame computes whatever is still missing itself."""
+        if self._command is None or not self.mapper.engaged:
+            return
+        if self._command_condition is None:
+            self._command_condition = condition_number(self.kinematics.jacobian(self._command))
+        if self._command_pose is None:
+            self._command_pose = self.kinematics.forward_pose(self._command)
+
     def _partial_step(self, target_position, target_orientation, fraction, fallback):
         """Joints reaching ``fraction`` of the way from the commanded tool pose to the target."""
-        start_position, start_orientation = self.kinematics.forward_pose(self._command)
+        if self._command_pose is None:
+            self._command_pose = self.kinematics.forward_pose(self._command)
+        start_position, start_orientation = self._command_pose
         orientation = slerp(start_orientation, target_orientation, fraction)
         position = start_position + fraction * (np.asarray(target_position) - start_position)
         result = self.kinematics.solve_ik(pose_to_se3(position, orientation), self._command)
@@ -190,11 +210,17 @@ class TeleopCore:
         target_position, fenced = self.fence.clamp(target_position)
         if fenced:
             flags.append(TeleopStatus.WORKSPACE_LIMIT)
-        result = self.kinematics.solve_ik(pose_to_se3(target_position, target_orientation), self._command)
+        # Seeded with the previous frame's IK solution: the hand moved little since, so one
+        # iteration usually converges, while the command may lag far behind under the speed
+        # limits. Both seeds lie on the same continuous branch (each solution started from
+        # the one before, back to the measured joints at engage).
+        seed = self._command if self._last_goal is None else self._last_goal
+        result = self.kinematics.solve_ik(pose_to_se3(target_position, target_orientation), seed)
         if not result.success:
             self.status = TeleopStatus.IK_FAILED
             return None
         joints, clipped = self.margin.apply(result.joints)
+        self._last_goal = joints
         if clipped:
             flags.append(TeleopStatus.JOINT_LIMIT_MARGIN)
         fraction = self.ramp.fraction(stamp)
@@ -225,6 +251,7 @@ class TeleopCore:
         # The condition number at the new command is known when it is the IK target itself;
         # otherwise the next frame computes it (one Jacobian SVD instead of two per frame).
         self._command_condition = None if (partial or limited) else target_condition
+        self._command_pose = None
         self._command = joints
         self._command_stamp = stamp
         self.watchdog.commanded(now)
