@@ -4,7 +4,7 @@ import pytest
 
 from conftest import HOME, UR5E
 from motion_commander.errors import MotionCommanderError
-from motion_common.kinematics import RobotKinematics
+from motion_common.kinematics import RobotKinematics, pose_to_se3
 from motion_commander.safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard,
                                      StaleCommandWatchdog, WorkspaceFence, condition_number)
 from motion_commander.teleop import ButtonClutch, GestureClutch, TeleopMapper, make_clutch
@@ -210,7 +210,7 @@ def test_limiter_keeps_pace_with_a_target_moving_at_constant_speed():
     assert target - command < 0.01, f"lags {target - command:.4f} rad behind a 1 rad/s target"
 
 
-def test_carried_condition_number_gives_the_same_commands_as_recomputing_it():
+def test_carried_and_prepared_command_figures_give_the_same_commands_as_recomputing_them():
     # The core carries the Jacobian condition number of an unlimited command to the next
     # frame instead of recomputing it; the commands must be exactly those of recomputing.
     import os
@@ -220,7 +220,7 @@ def test_carried_condition_number_gives_the_same_commands_as_recomputing_it():
     from motion_sensor.sequencer import Sequencer
     frames = read_recording(os.path.join(DATA, "test-paddle-rightwards.jsonl.gz")).frames
     runs = []
-    for recompute in (False, True):
+    for recompute, prepare in ((False, False), (True, False), (False, True)):
         core = make_core(joint_speed_scale=1.0, joint_acceleration=200.0)
         sequencer, commands, carried = Sequencer(), [], 0
         for frame in frames:
@@ -236,7 +236,33 @@ def test_carried_condition_number_gives_the_same_commands_as_recomputing_it():
             if command is not None:
                 commands.append(command.joints)
                 core.on_joint_state(command.joints)
+                if prepare:  # as the node does once the command is out
+                    core.prepare_next()
+                    assert core._command_condition is not None and core._command_pose is not None
         runs.append((np.array(commands), carried))
-    (carried_run, carried_frames), (recomputed_run, _) = runs
+    (carried_run, carried_frames), (recomputed_run, _), (prepared_run, _) = runs
     assert len(carried_run) > 300 and carried_frames > 100, "the cache was never used: the test shows nothing"
     np.testing.assert_allclose(carried_run, recomputed_run, rtol=0, atol=1e-9)
+    # Computing the command's condition number and pose between frames changes nothing either.
+    np.testing.assert_allclose(prepared_run, recomputed_run, rtol=0, atol=1e-9)
+
+
+def test_ik_seeded_with_the_last_goal_stays_on_the_commanded_branch():
+    # A fast hand with the joints speed-limited: the command lags the IK goal. Seeding each
+    # IK with the previous goal must give the solution of the same branch as seeding with
+    # the command would (the joints the arm is heading for), frame after frame.
+    core = make_core(joint_speed_scale=0.2, joint_acceleration=200.0)
+    limited = 0
+    for i in range(120):
+        hand = [0.15 * np.sin(i / 15.0), 0.1 * np.sin(i / 9.0), 0.2]
+        command = core.on_hand_pose(0.009 * i, hand, IDENTITY)
+        if command is None:
+            continue
+        limited += command.status == TeleopStatus.JOINT_SPEED_LIMITED
+        goal = core._last_goal
+        reference = core.kinematics.solve_ik(pose_to_se3(command.target_position, command.target_orientation),
+                                             core._command)
+        assert reference.success
+        np.testing.assert_allclose(goal, core.margin.apply(reference.joints)[0], atol=1e-3)
+        core.on_joint_state(command.joints)
+    assert limited > 20, "the command never lagged: the test shows nothing"
