@@ -46,6 +46,12 @@ URDF = os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf")
 HOME = [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
 
 
+def extra_frames(variant):
+    """Frames the source sends beyond ``count`` (and the relay forwards): nothing downstream
+    waits on a lost tail, and the core's clutch takes 10 frames to engage."""
+    return 20 + (30 if variant == "core_work" else 0)
+
+
 def _queue(variant):
     """Publisher queue_size of a variant: None is rospy's synchronous publish."""
     return 10 if variant == "floor" else None
@@ -111,6 +117,7 @@ def role_caller(out, count, variant):
     from geometry_msgs.msg import PoseStamped
     from motion_commander.srv import commander, commanderRequest
     from sensor_msgs.msg import JointState
+    from std_msgs.msg import Bool
     core = _core() if variant == "core_work" else None
     if variant == "topic_last_hop":
         pub = rospy.Publisher("/floor/joints", JointState, queue_size=None, tcp_nodelay=True)
@@ -144,7 +151,12 @@ def role_caller(out, count, variant):
             core.on_joint_state(joints)
         send(msg.header.stamp, joints)
         sent.append(1)
-    rospy.Subscriber("/floor/pose", PoseStamped, on_pose, queue_size=10, tcp_nodelay=True)
+    subscriber = rospy.Subscriber("/floor/pose", PoseStamped, on_pose, queue_size=10, tcp_nodelay=True)
+    # The source starts only once this end of the chain is connected: a caller slow to
+    # start (the core's imports) must not miss the first poses.
+    _spin_until(lambda: subscriber.get_num_connections() >= 1, 60.0)
+    ready = rospy.Publisher("/floor/ready", Bool, queue_size=1, latch=True)
+    ready.publish(Bool(True))
     _spin_until(lambda: len(sent) >= count, 180.0)
     _dump(out, rows)
 
@@ -165,7 +177,7 @@ def role_relay(out, count, variant):
         pose.pose.orientation = msg.orientation
         pub.publish(pose)
     rospy.Subscriber("/floor/hand", hand, on_hand, queue_size=10, tcp_nodelay=True)
-    _spin_until(lambda: len(rows) >= count, 180.0)
+    _spin_until(lambda: len(rows) >= count + extra_frames(variant), 180.0)
     _dump(out, rows)
 
 
@@ -180,16 +192,16 @@ def role_source(_out, count, rate, variant):
     """Publish ``count`` recorded hands at ``rate`` Hz once the chain is connected."""
     import rospy
     from motion_sensor.msg import hand
+    from std_msgs.msg import Bool
     pub = rospy.Publisher("/floor/hand", hand, queue_size=_queue(variant), tcp_nodelay=True)
     path = recorded_hands()
-    deadline = time.monotonic() + 60.0
-    while pub.get_num_connections() < 1 and time.monotonic() < deadline:
-        time.sleep(0.05)
-    time.sleep(1.0)  # let the relay's and caller's own connections settle
+    ready = []
+    rospy.Subscriber("/floor/ready", Bool, lambda msg: ready.append(msg.data), queue_size=1)
+    # Start once the relay listens and the caller says the rest of the chain is connected.
+    _spin_until(lambda: pub.get_num_connections() >= 1 and ready, 60.0)
     period = 1.0 / rate
     start = time.monotonic()
-    extra = 20 + (30 if variant == "core_work" else 0)  # the core's clutch takes 10 frames to engage
-    for k in range(count + extra):  # a few extra: nothing downstream waits on a lost tail
+    for k in range(count + extra_frames(variant)):
         position, orientation = path[k % len(path)]
         msg = hand(hands_num=1, hand_type=["right"])
         msg.position.x, msg.position.y, msg.position.z = position

@@ -194,15 +194,20 @@ class TeleopCore:
         if self._command_pose is None:
             self._command_pose = self.kinematics.forward_pose(self._command)
 
-    def _partial_step(self, target_position, target_orientation, fraction, fallback):
-        """Joints reaching ``fraction`` of the way from the commanded tool pose to the target."""
+    def _partial_step(self, target_position, target_orientation, fraction, goal):
+        """Joints reaching ``fraction`` of the way from the commanded tool pose to the target
+        (whose IK solution is ``goal``, also the fallback when this IK fails)."""
         if self._command_pose is None:
             self._command_pose = self.kinematics.forward_pose(self._command)
         start_position, start_orientation = self._command_pose
         orientation = slerp(start_orientation, target_orientation, fraction)
         position = start_position + fraction * (np.asarray(target_position) - start_position)
-        result = self.kinematics.solve_ik(pose_to_se3(position, orientation), self._command)
-        return self.margin.apply(result.joints)[0] if result.success else fallback
+        # Seeded the same fraction of the way in joint space: for the small steps of a
+        # stream that point already lies within the IK's tolerance of the Cartesian one
+        # (the solve then ends at its first check), and otherwise it is the closer start.
+        seed = self._command + fraction * (goal - self._command)
+        result = self.kinematics.solve_ik(pose_to_se3(position, orientation), seed)
+        return self.margin.apply(result.joints)[0] if result.success else goal
 
     def _command_for(self, stamp, now, position, orientation) -> Optional[TeleopCommand]:
         flags = []
