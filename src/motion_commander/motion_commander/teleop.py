@@ -80,6 +80,12 @@ class TeleopMapper:
 
     def target(self, hand_position, hand_orientation):
         """Tool target (position, quaternion x, y, z, w) for the given hand pose."""
+        position, rotation = self.target_transform(hand_position, hand_orientation)
+        return position, matrix_to_quat(rotation)
+
+    def target_transform(self, hand_position, hand_orientation):
+        """Tool target (position, 3x3 rotation matrix) for the given hand pose: what the IK
+        takes, without a round trip through a quaternion on every frame."""
         if not self.engaged:
             raise MotionCommanderError("teleop is not engaged; call engage() first")
         hand_p0, hand_r0 = self._hand_ref
@@ -90,13 +96,13 @@ class TeleopMapper:
             displacement = self.hand_to_robot @ displacement
         position = tool_p0 + self.speed_ratio * displacement
         if not self.follow_orientation:
-            return position, matrix_to_quat(tool_r0)
+            return position, tool_r0
         # The hand's rotation since engage, re-expressed in the robot base frame, is applied
         # to the tool in the base frame, so turning the hand turns the tool the same way.
         delta = quat_to_matrix(hand_orientation) @ hand_r0.T
         if not self._aligned:
             delta = self.hand_to_robot @ delta @ self.hand_to_robot.T
-        return position, matrix_to_quat(delta @ tool_r0)
+        return position, delta @ tool_r0
 
 
 class AutoClutch:

@@ -10,7 +10,11 @@ from typing import Optional
 
 import numpy as np
 
-from motion_common.kinematics import RobotKinematics, pose_to_se3, slerp
+import math
+
+import pinocchio as pin
+
+from motion_common.kinematics import RobotKinematics, matrix_to_quat, pose_to_se3, slerp
 from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
                      WorkspaceFence, condition_number)
 from .teleop import AutoClutch, TeleopMapper
@@ -61,13 +65,20 @@ class SafetyConfig:
 
 @dataclass
 class TeleopCommand:
-    """A joint target for the driver, with the sensor stamp it came from."""
+    """A joint target for the driver, with the sensor stamp it came from and the tool
+    target it was solved for (position, 3x3 rotation)."""
 
     stamp: float
     joints: np.ndarray
     target_position: np.ndarray
-    target_orientation: np.ndarray
+    target_rotation: np.ndarray
     status: TeleopStatus = TeleopStatus.ENGAGED
+
+    @property
+    def target_orientation(self) -> np.ndarray:
+        """The target rotation as a quaternion (x, y, z, w); computed when asked for, i.e.
+        after the command has left, not on every frame's latency."""
+        return matrix_to_quat(self.target_rotation)
 
 
 class TeleopCore:
@@ -150,12 +161,17 @@ class TeleopCore:
                      now: Optional[float] = None) -> Optional[TeleopCommand]:
         """Process one filtered hand pose; return the command to send, if any."""
         now = stamp if now is None else now
-        position = np.asarray(position, dtype=float)
-        orientation = np.asarray(orientation, dtype=float)
-        if not (np.all(np.isfinite(position)) and np.all(np.isfinite(orientation))
-                and abs(np.linalg.norm(orientation) - 1.0) < 1e-3):
+        # Plain floats for the checks: numpy's per-call overhead on 3- and 4-vectors costs
+        # more than the checks, and this runs on every frame's latency.
+        try:
+            p, q = [float(v) for v in position], [float(v) for v in orientation]
+        except (TypeError, ValueError):
+            p, q = [], []
+        if not (len(p) == 3 and len(q) == 4 and all(map(math.isfinite, p + q))
+                and abs(math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) - 1.0) < 1e-3):
             self.status = TeleopStatus.BAD_INPUT
             return None
+        position, orientation = np.array(p), np.array(q)
         if self.measured_joints is None or self.estopped:
             return None
         if not self.clutch.on_frame(stamp, hands_num):
@@ -211,7 +227,7 @@ class TeleopCore:
 
     def _command_for(self, stamp, now, position, orientation) -> Optional[TeleopCommand]:
         flags = []
-        target_position, target_orientation = self.mapper.target(position, orientation)
+        target_position, target_rotation = self.mapper.target_transform(position, orientation)
         target_position, fenced = self.fence.clamp(target_position)
         if fenced:
             flags.append(TeleopStatus.WORKSPACE_LIMIT)
@@ -220,7 +236,7 @@ class TeleopCore:
         # limits. Both seeds lie on the same continuous branch (each solution started from
         # the one before, back to the measured joints at engage).
         seed = self._command if self._last_goal is None else self._last_goal
-        result = self.kinematics.solve_ik(pose_to_se3(target_position, target_orientation), seed)
+        result = self.kinematics.solve_ik(pin.SE3(target_rotation, target_position), seed)
         if not result.success:
             self.status = TeleopStatus.IK_FAILED
             return None
@@ -247,7 +263,7 @@ class TeleopCore:
             # Too far for one step: aim at the point 1/overshoot of the way along the
             # Cartesian path instead of cutting straight through joint space, which can
             # swing the tool far off the path when the IK solution moved a lot.
-            joints = self._partial_step(target_position, target_orientation, 1.0 / overshoot, joints)
+            joints = self._partial_step(target_position, matrix_to_quat(target_rotation), 1.0 / overshoot, joints)
             joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal)
         else:  # the step to the IK target itself: its overshoot is known
             joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal, ratio=overshoot)
@@ -262,7 +278,7 @@ class TeleopCore:
         self.watchdog.commanded(now)
         # The most safety-relevant condition is the one reported.
         self.status = max(flags, key=_severity) if flags else TeleopStatus.ENGAGED
-        return TeleopCommand(stamp, joints, target_position, target_orientation, self.status)
+        return TeleopCommand(stamp, joints, target_position, target_rotation, self.status)
 
 
 _SEVERITY = [TeleopStatus.SINGULARITY_HALT, TeleopStatus.WORKSPACE_LIMIT, TeleopStatus.JOINT_LIMIT_MARGIN,
