@@ -1,6 +1,6 @@
 """Core benchmarks: IK per teleop step (warm start against a cold-start baseline) on
 reachable continuous paths for every shipped robot, and the core's cost per frame
-(TeleopCore.on_hand_pose: mapping, IK, all safety rules) on real Leap recordings, against
+(TeleopCore.on_hand_pose with teleop.yaml: mapping, IK, all safety rules) on real Leap recordings, against
 IK alone as baseline. Pure Python, no ROS.
 
 Run: bench/run core_bench [--paths 20]
@@ -20,7 +20,8 @@ for package in ("motion_sensor", "motion_commander"):
 from bench_common import RESULTS, write_results  # noqa: E402
 from motion_common.kinematics import RobotKinematics  # noqa: E402
 from motion_commander.teleop import TeleopMapper, make_clutch  # noqa: E402
-from motion_commander.teleop_core import SafetyConfig, TeleopCore  # noqa: E402
+from motion_commander.config import load_teleop_config  # noqa: E402
+from motion_commander.teleop_core import TeleopCore  # noqa: E402
 from motion_sensor.leap_v6 import frame_to_sample, read_recording  # noqa: E402
 from motion_sensor.sequencer import Sequencer  # noqa: E402
 
@@ -67,10 +68,15 @@ def ik_benchmark(robot, paths, rng):
 def core_benchmark():
     """TeleopCore.on_hand_pose per frame on the sequenced real recordings (UR5e)."""
     kin = RobotKinematics(os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf"))
+    import yaml
+    with open(os.path.join(ROOT, "src", "motion_commander", "config", "teleop.yaml"), encoding="utf-8") as fh:
+        config = load_teleop_config(yaml.safe_load(fh))
     per_frame, ik_only = [], []
     for name in RECORDINGS:
         recording = read_recording(os.path.join(ROOT, "tests", "data", f"{name}.jsonl.gz"))
-        core = TeleopCore(kin, TeleopMapper(0.5), make_clutch("auto", 10), SafetyConfig(joint_speed_scale=1.0))
+        # The session's own configuration (teleop.yaml: speed ratio, limits, acceleration).
+        core = TeleopCore(kin, TeleopMapper(config.speed_ratio), make_clutch(config.engage, config.steady_frames,
+                                                                          config.lost_after), config.safety)
         core.on_joint_state(HOMES["ur5e"])
         sequencer = Sequencer()
         for frame in recording.frames:
@@ -82,6 +88,7 @@ def core_benchmark():
             command = core.on_hand_pose(pose.stamp, pose.position, pose.orientation)
             elapsed = time.perf_counter() - start
             if command is not None:
+                core.prepare_next()  # as the node does, once the command is out (not timed)
                 per_frame.append(elapsed)
                 start = time.perf_counter()
                 kin.solve_ik(kin.forward(command.joints), command.joints)
