@@ -5,13 +5,11 @@ e-stop; it answers with the joint target to stream, or with the status that expl
 nothing is sent. ``tick`` tells the node when to halt the robot (stale input).
 """
 import enum
+import math
 from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
-
-import math
-
 import pinocchio as pin
 
 from motion_common.kinematics import RobotKinematics, matrix_to_quat, pose_to_se3, slerp
