@@ -28,6 +28,7 @@ Run: bench/run e2e_latency [--recordings NAME ...] [--min-commands 1000] [--floo
 Writes bench/results/e2e_latency.json and bench/results/e2e_latency.png.
 """
 import argparse
+import json
 import math
 import os
 import subprocess
@@ -73,7 +74,6 @@ def run_session(recording, repeat=1):
     if not os.path.exists(path):
         raise RuntimeError(f"the session on {recording} wrote no summary; run scripts/teleop_sim "
                            f"recording:={recording_path(recording)} to see why")
-    import json
     with open(path, encoding="utf-8") as fh:
         return json.load(fh)
 

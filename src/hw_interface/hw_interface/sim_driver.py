@@ -132,10 +132,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._follower = StreamFollower(self.kinematics.velocity_limits, self._initial)
         # Wall-clock time (s) of the state after the last physics step, see joint_sample().
         self._step_stamp = time.time()
-        # (steps, stamp, joints) and (steps, position, orientation) of the tool, read after
-        # the step numbered steps; None after a reset.
-        self._state_cache = None
-        self._pose_cache = None
+        # name -> (steps, value): readings of the state after the step numbered steps, see
+        # _once_per_step; replaced by an empty dict when a reset moves the arm.
+        self._step_cache = {}
         self._path: Optional[JointPath] = None
         self._path_start = 0.0
         self._path_done = threading.Event()
@@ -181,8 +180,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._max_speeds = self.kinematics.velocity_limits.tolist()
         for index, value in zip(self._joint_indices, self._initial):
             self._client.resetJointState(self._body, index, float(value))
-        self._state_cache = None
-        self._pose_cache = None
+        self._step_cache = {}
         self._target = self._initial.copy()
         self._follower.reset(self._initial)
         self.bodies = load_scene(self._client, self.scene_spec)
@@ -209,21 +207,29 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
     def get_robot_joints(self) -> np.ndarray:
         return self.joint_sample()[1]
 
+    def _once_per_step(self, name, read):
+        """``read()`` (under the lock) for the latest finished physics step, cached.
+
+        The state only changes with a physics step (or a reset, which clears the cache), so
+        it is read from pybullet once per step. A reading of the latest finished step is
+        returned WITHOUT the lock: a streamed command then never waits for the step in
+        progress (~0.1-0.2 ms of the 500 Hz loop) just to check or answer.
+        """
+        cached = self._step_cache.get(name)  # (steps, value) tuples are never mutated
+        if cached is None or cached[0] != self.steps:
+            with self._lock:
+                self._require_connection()
+                cached = (self.steps, read())
+                self._step_cache[name] = cached
+        return cached[1]
+
     def joint_sample(self):
         """(wall-clock time of the physics step the joints come from, measured joints)."""
-        # The state only changes with a physics step (or a reset, which clears the cache),
-        # so it is read from pybullet once per step. A cached sample of the latest finished
-        # step is returned WITHOUT the lock: a streamed command then never waits for the
-        # step in progress (~0.1-0.2 ms of the 500 Hz loop) just to check or answer.
-        cached = self._state_cache  # one reference read: the tuple is never mutated
-        if cached is not None and cached[0] == self.steps:
-            return cached[1], cached[2].copy()
-        with self._lock:
-            self._require_connection()
+        def read():
             states = self._client.getJointStates(self._body, self._joint_indices)
-            cached = (self.steps, self._step_stamp, np.array([s[0] for s in states]))
-            self._state_cache = cached
-        return cached[1], cached[2].copy()
+            return self._step_stamp, np.array([s[0] for s in states])
+        stamp, joints = self._once_per_step("joints", read)
+        return stamp, joints.copy()
 
     def get_joint_velocities(self) -> np.ndarray:
         """Measured joint velocities (rad/s)."""
@@ -233,14 +239,11 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         return np.array([s[1] for s in states])
 
     def get_robot_cartesian_position(self):
-        cached = self._pose_cache  # as joint_sample: once per physics step, lock-free when cached
-        if cached is None or cached[0] != self.steps:
-            with self._lock:
-                self._require_connection()
-                state = self._client.getLinkState(self._body, self._tool_link, computeForwardKinematics=True)
-                cached = (self.steps, np.array(state[4]), np.array(state[5]))
-                self._pose_cache = cached
-        return cached[1].copy(), cached[2].copy()
+        def read():
+            state = self._client.getLinkState(self._body, self._tool_link, computeForwardKinematics=True)
+            return np.array(state[4]), np.array(state[5])
+        position, orientation = self._once_per_step("tool_pose", read)
+        return position.copy(), orientation.copy()
 
     def status(self) -> DriverStatus:
         moving = self._path is not None
@@ -382,8 +385,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 self._client.resetBaseVelocity(body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
             for joint, value in zip(self._joint_indices, self._initial):
                 self._client.resetJointState(self._body, joint, float(value))
-            self._state_cache = None
-            self._pose_cache = None
+            self._step_cache = {}
             self._target = self._initial.copy()
             self._follower.reset(self._target)
 

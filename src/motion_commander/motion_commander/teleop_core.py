@@ -203,17 +203,25 @@ class TeleopCore:
         sooner. Optional: the next frame computes whatever is still missing itself."""
         if self._command is None or not self.mapper.engaged:
             return
+        self._condition_at_command()
+        self._pose_at_command()
+
+    def _condition_at_command(self) -> float:
+        """Jacobian condition number at the current command, computed once per command."""
         if self._command_condition is None:
             self._command_condition = condition_number(self.kinematics.jacobian(self._command))
+        return self._command_condition
+
+    def _pose_at_command(self):
+        """Tool (position, quaternion) at the current command, computed once per command."""
         if self._command_pose is None:
             self._command_pose = self.kinematics.forward_pose(self._command)
+        return self._command_pose
 
     def _partial_step(self, target_position, target_orientation, fraction, goal):
         """Joints reaching ``fraction`` of the way from the commanded tool pose to the target
         (whose IK solution is ``goal``, also the fallback when this IK fails)."""
-        if self._command_pose is None:
-            self._command_pose = self.kinematics.forward_pose(self._command)
-        start_position, start_orientation = self._command_pose
+        start_position, start_orientation = self._pose_at_command()
         orientation = slerp(start_orientation, target_orientation, fraction)
         position = start_position + fraction * (np.asarray(target_position) - start_position)
         # Seeded the same fraction of the way in joint space: for the small steps of a
@@ -245,10 +253,8 @@ class TeleopCore:
         fraction = self.ramp.fraction(stamp)
         if fraction < 1.0:
             flags.append(TeleopStatus.RAMPING)
-        if self._command_condition is None:
-            self._command_condition = condition_number(self.kinematics.jacobian(self._command))
         target_condition = condition_number(self.kinematics.jacobian(joints))
-        singular = self.singularity.speed_fraction(self._command_condition, target_condition)
+        singular = self.singularity.speed_fraction(self._condition_at_command(), target_condition)
         if singular < 1.0:
             flags.append(TeleopStatus.SINGULARITY_HALT if singular == 0.0 else TeleopStatus.SINGULARITY_SLOWDOWN)
         speed = min(fraction, singular)
