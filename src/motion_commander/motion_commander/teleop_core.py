@@ -36,6 +36,11 @@ class TeleopStatus(enum.IntEnum):
     RAMPING = 12              # just engaged or resumed: speed ramping up from zero
 
 
+# Engaged and commanding at the allowed speed: the statuses a fast hand moves among many
+# times a second (nothing for the operator to act on).
+STREAMING_STATUSES = frozenset({TeleopStatus.ENGAGED, TeleopStatus.JOINT_SPEED_LIMITED, TeleopStatus.RAMPING})
+
+
 class Action(enum.Enum):
     """What tick() asks the node to do."""
 
