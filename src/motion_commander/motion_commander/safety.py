@@ -10,6 +10,7 @@ Each rule is small and separately testable:
 - EngageRamp: the allowed speed ramps from zero after engage or resume (no start-up jerk);
 - StaleCommandWatchdog: a command older than the timeout halts the robot.
 """
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,15 +18,14 @@ import numpy as np
 from .errors import MotionCommanderError
 
 
-def braking_speed(distance, acceleration: float, dt: float):
+def braking_speed(distance: float, acceleration: float, dt: float) -> float:
     """Largest speed from which steps of ``dt`` s, decelerating by ``acceleration`` each,
-    stop within ``distance`` (element-wise, same unit as distance per s).
+    stop within ``distance`` (>= 0; same unit as distance per s).
 
     Stopping from v = n a dt covers a dt^2 n (n + 1) / 2 including this step's own move;
     solving for n gives the discrete form of the familiar sqrt(2 a d).
     """
-    d = np.abs(np.asarray(distance, dtype=float))
-    return acceleration * dt * (np.sqrt(0.25 + 2.0 * d / (acceleration * dt * dt)) - 0.5)
+    return acceleration * dt * (math.sqrt(0.25 + 2.0 * distance / (acceleration * dt * dt)) - 0.5)
 
 
 class JointStepLimiter:
@@ -49,7 +49,8 @@ class JointStepLimiter:
             raise MotionCommanderError("every joint needs a finite velocity limit > 0 in the URDF")
         if acceleration_limit is not None and not acceleration_limit > 0:
             raise MotionCommanderError(f"acceleration limit must be > 0 rad/s^2, got {acceleration_limit!r}")
-        self.max_velocity = limits * scale
+        self.max_velocity = limits * scale  # rad/s per joint
+        self._max_velocity = [float(v) for v in self.max_velocity]  # the same, for the per-frame path
         self.max_acceleration = acceleration_limit
         # dt is clamped: a long gap (hand lost, then back) must not permit a big jump.
         self.min_dt = min_dt
@@ -62,51 +63,69 @@ class JointStepLimiter:
         self._target = None
         self._target_velocity = None
 
+    # The methods below run on every teleop frame, on its latency. They work on plain
+    # float lists: a numpy call on a 6-vector costs ~1 us in a hot loop but ~6 us after the
+    # ~9 ms of idle between frames (cold caches), ~4x a plain-Python loop doing the same
+    # (bench/e2e_latency --breakdown, issue 14).
+
     def observe_target(self, target, dt: float) -> None:
         """Record this frame's unlimited joint target: its velocity lets a command that
         follows a moving target keep pace instead of braking as if it were to stop there."""
-        target = np.asarray(target, dtype=float)
-        dt = float(np.clip(dt, self.min_dt, self.max_dt))
-        self._target_velocity = None if self._target is None else (target - self._target) / dt
+        target = [float(v) for v in target]
+        dt = self._clamped_dt(dt)
+        previous = self._target
+        self._target_velocity = None if previous is None else [(t - p) / dt for t, p in zip(target, previous)]
         self._target = target
 
     def _clamped_dt(self, dt: float) -> float:
         return min(max(float(dt), self.min_dt), self.max_dt)
 
-    def _max_step(self, previous: np.ndarray, goal: np.ndarray, dt: float, speed_fraction: float):
+    def _max_steps(self, previous, goal, dt: float, speed_fraction: float) -> list:
         """Largest joint step (abs, per joint) allowed toward ``goal`` this step."""
-        max_step = self.max_velocity * (dt * max(speed_fraction, 0.0))
-        if self.max_acceleration is None:
-            return max_step
-        direction = goal - previous
-        error = direction
-        # Slow enough to stop where the goal itself would stop if it braked as hard as we
-        # may: a goal moving on at v stops v^2/2a further on (so we keep pace), a goal
-        # slowing down for a reversal brings that point back to its peak (so we brake in
-        # time), and a goal already coming back leaves no distance at all (so we brake now).
-        if self._target_velocity is not None:
-            v = self._target_velocity
-            error = direction + v * np.abs(v) / (2.0 * self.max_acceleration)
-        room = np.maximum(error * np.sign(direction), 0.0)
-        return np.minimum(max_step, braking_speed(room, self.max_acceleration, dt) * dt)
+        scale = dt * max(speed_fraction, 0.0)
+        max_steps = [limit * scale for limit in self._max_velocity]
+        acceleration = self.max_acceleration
+        if acceleration is None:
+            return max_steps
+        target_velocity = self._target_velocity
+        for i, (p, g) in enumerate(zip(previous, goal)):
+            direction = g - p
+            if direction == 0.0:
+                max_steps[i] = 0.0  # already there: no room to move in either direction
+                continue
+            error = direction
+            # Slow enough to stop where the goal itself would stop if it braked as hard as
+            # we may: a goal moving on at v stops v^2/2a further on (so we keep pace), a goal
+            # slowing down for a reversal brings that point back to its peak (so we brake in
+            # time), and a goal already coming back leaves no distance at all (so we brake now).
+            if target_velocity is not None:
+                v = target_velocity[i]
+                error += v * abs(v) / (2.0 * acceleration)
+            room = error if direction > 0.0 else -error
+            if room <= 0.0:
+                max_steps[i] = 0.0
+            else:
+                max_steps[i] = min(max_steps[i], braking_speed(room, acceleration, dt) * dt)
+        return max_steps
 
     def overshoot(self, previous, target, dt: float, speed_fraction: float = 1.0, goal=None) -> float:
         """How many times too large the step to ``target`` is for the velocity limit and,
         with an acceleration limit, for stopping at ``goal`` (default: target) (<= 1:
         allowed as is). No side effect."""
-        # Runs on every teleop frame: plain float and array operations, no np.clip or
-        # np.errstate (their call overhead is larger than this arithmetic).
-        previous = np.asarray(previous, dtype=float)
-        target = np.asarray(target, dtype=float)
-        goal = target if goal is None else np.asarray(goal, dtype=float)
-        step = np.abs(target - previous)
-        max_step = self._max_step(previous, goal, self._clamped_dt(dt), speed_fraction)
-        blocked = max_step <= 0
-        if blocked.any():
-            if (step[blocked] > 0).any():
-                return float("inf")
-            max_step = np.where(blocked, np.inf, max_step)  # nothing to do there: ratio 0
-        return float((step / max_step).max())
+        previous = [float(v) for v in previous]
+        target = [float(v) for v in target]
+        goal = target if goal is None else [float(v) for v in goal]
+        max_steps = self._max_steps(previous, goal, self._clamped_dt(dt), speed_fraction)
+        ratio = 0.0
+        for p, t, max_step in zip(previous, target, max_steps):
+            step = abs(t - p)
+            if max_step <= 0.0:
+                if step > 0.0:
+                    return float("inf")
+                continue  # nothing to do there: ratio 0
+            if step / max_step > ratio:
+                ratio = step / max_step
+        return ratio
 
     def limit(self, previous, target, dt: float, speed_fraction: float = 1.0, goal=None, ratio=None):
         """Return (command, limited): previous moved toward target within the limits.
@@ -116,23 +135,23 @@ class JointStepLimiter:
         passes the frame's full IK target when ``target`` is a partial step toward it.
         ``ratio`` is this same step's ``overshoot()``, when the caller has computed it.
         """
-        previous = np.asarray(previous, dtype=float)
-        step = np.asarray(target, dtype=float) - previous
+        previous = [float(v) for v in previous]
+        step = [float(t) - p for t, p in zip(target, previous)]
         dt = self._clamped_dt(dt)
         if ratio is None:
             ratio = self.overshoot(previous, target, dt, speed_fraction, goal)
         limited = ratio > 1.0
         if limited:
-            step = step / ratio if np.isfinite(ratio) else np.zeros_like(step)
+            step = [s / ratio for s in step] if math.isfinite(ratio) else [0.0] * len(step)
         if self.max_acceleration is not None:
-            previous_velocity = np.zeros_like(step) if self._velocity is None else self._velocity
-            dv = step / dt - previous_velocity
-            excess = float(np.max(np.abs(dv)) / (self.max_acceleration * dt))
+            previous_velocity = self._velocity or [0.0] * len(step)
+            dv = [s / dt - v for s, v in zip(step, previous_velocity)]
+            excess = max(abs(d) for d in dv) / (self.max_acceleration * dt)
             if excess > 1.0:
-                step = (previous_velocity + dv / excess) * dt
+                step = [(v + d / excess) * dt for v, d in zip(previous_velocity, dv)]
                 limited = True
-        self._velocity = step / dt
-        return previous + step, limited
+        self._velocity = [s / dt for s in step]
+        return np.array([p + s for p, s in zip(previous, step)]), limited
 
 
 class JointLimitMargin:
@@ -143,12 +162,14 @@ class JointLimitMargin:
         self.upper = np.asarray(upper, dtype=float) - margin
         if np.any(self.lower >= self.upper):
             raise MotionCommanderError(f"joint limit margin {margin} rad leaves no range for some joint")
+        self._lower, self._upper = self.lower.tolist(), self.upper.tolist()
 
     def apply(self, joints):
         """Return (clipped joints, whether any joint was clipped)."""
-        q = np.asarray(joints, dtype=float)
-        clipped = np.minimum(np.maximum(q, self.lower), self.upper)  # np.clip's dispatch costs more
-        return clipped, bool((clipped != q).any())
+        # Per frame: plain floats (see JointStepLimiter), one array built at the end.
+        q = [float(v) for v in joints]
+        clipped = [min(max(v, low), high) for v, low, high in zip(q, self._lower, self._upper)]
+        return np.array(clipped), clipped != q
 
 
 class SingularityGuard:
@@ -199,14 +220,16 @@ class WorkspaceFence:
         if self.lower.shape != (3,) or self.upper.shape != (3,) or np.any(self.lower >= self.upper):
             raise MotionCommanderError("workspace box needs lower < upper, 3 values each (m)")
         # The box's lower corner raised to the floor, once (clamp runs on every frame).
-        self._floored_lower = self.lower.copy()
-        self._floored_lower[2] = max(self._floored_lower[2], self.floor_z)
+        self._floored_lower = self.lower.tolist()
+        self._floored_lower[2] = max(self._floored_lower[2], float(self.floor_z))
+        self._upper = self.upper.tolist()
 
     def clamp(self, position):
         """Return (position clamped into the fence, whether it was outside)."""
-        p = np.asarray(position, dtype=float)
-        clamped = np.minimum(np.maximum(p, self._floored_lower), self.upper)
-        return clamped, bool((clamped != p).any())
+        # Per frame: plain floats (see JointStepLimiter), one array built at the end.
+        p = [float(v) for v in position]
+        clamped = [min(max(v, low), high) for v, low, high in zip(p, self._floored_lower, self._upper)]
+        return np.array(clamped), clamped != p
 
 
 class EngageRamp:

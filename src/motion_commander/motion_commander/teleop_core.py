@@ -12,7 +12,7 @@ from typing import Optional
 import numpy as np
 import pinocchio as pin
 
-from motion_common.kinematics import RobotKinematics, matrix_to_quat, pose_to_se3, slerp
+from motion_common.kinematics import RobotKinematics, matrix_to_quat
 from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
                      WorkspaceFence, condition_number)
 from .teleop import AutoClutch, TeleopMapper
@@ -174,7 +174,7 @@ class TeleopCore:
                 and abs(math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) - 1.0) < 1e-3):
             self.status = TeleopStatus.BAD_INPUT
             return None
-        position, orientation = np.array(p), np.array(q)
+        position, orientation = p, q  # the mapper takes float lists
         if self.measured_joints is None or self.estopped:
             return None
         if not self.clutch.on_frame(stamp, hands_num):
@@ -223,17 +223,18 @@ class TeleopCore:
             self._command_pose = self.kinematics.forward_pose(self._command)
         return self._command_pose
 
-    def _partial_step(self, target_position, target_orientation, fraction, goal):
+    def _partial_step(self, target_position, target_rotation, fraction, goal):
         """Joints reaching ``fraction`` of the way from the commanded tool pose to the target
         (whose IK solution is ``goal``, also the fallback when this IK fails)."""
         start_position, start_orientation = self._pose_at_command()
-        orientation = slerp(start_orientation, target_orientation, fraction)
-        position = start_position + fraction * (np.asarray(target_position) - start_position)
+        # Plain floats and pinocchio's own quaternion: fewer numpy calls on the frame's latency.
+        rotation = pin.Quaternion(start_orientation).slerp(fraction, pin.Quaternion(target_rotation)).matrix()
+        position = np.array([s + fraction * (t - s) for s, t in zip(start_position.tolist(), target_position.tolist())])
         # Seeded the same fraction of the way in joint space: for the small steps of a
         # stream that point already lies within the IK's tolerance of the Cartesian one
         # (the solve then ends at its first check), and otherwise it is the closer start.
-        seed = self._command + fraction * (goal - self._command)
-        result = self.kinematics.solve_ik(pose_to_se3(position, orientation), seed)
+        seed = np.array([c + fraction * (g - c) for c, g in zip(self._command.tolist(), goal.tolist())])
+        result = self.kinematics.solve_ik(pin.SE3(rotation, position), seed)
         return self.margin.apply(result.joints)[0] if result.success else goal
 
     def _command_for(self, stamp, now, position, orientation) -> Optional[TeleopCommand]:
@@ -272,7 +273,7 @@ class TeleopCore:
             # Too far for one step: aim at the point 1/overshoot of the way along the
             # Cartesian path instead of cutting straight through joint space, which can
             # swing the tool far off the path when the IK solution moved a lot.
-            joints = self._partial_step(target_position, matrix_to_quat(target_rotation), 1.0 / overshoot, joints)
+            joints = self._partial_step(target_position, target_rotation, 1.0 / overshoot, joints)
             joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal)
         else:  # the step to the IK target itself: its overshoot is known
             joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal, ratio=overshoot)

@@ -96,6 +96,7 @@ class RobotKinematics:
         self.lower = np.array(self.model.lowerPositionLimit)
         self.upper = np.array(self.model.upperPositionLimit)
         self.velocity_limits = np.array(self.model.velocityLimit)
+        self._damping_eyes = {}  # damping -> damping * I6, built once per value (solve_ik runs per frame)
 
     @property
     def dof(self) -> int:
@@ -133,16 +134,20 @@ class RobotKinematics:
         # eye) costs more than the 6x6 arithmetic itself.
         model, data, tool_id, lower, upper = self.model, self.data, self.tool_id, self.lower, self.upper
         q = np.minimum(np.maximum(np.asarray(seed, dtype=float), lower), upper)
-        damping_eye = damping * np.eye(6)
+        damping_eye = self._damping_eyes.get(damping)
+        if damping_eye is None:
+            damping_eye = self._damping_eyes[damping] = damping * np.eye(6)
         position_limit, rotation_limit = position_tolerance ** 2, rotation_tolerance ** 2
         error = np.zeros(6)
         for iteration in range(max_iterations + 1):
             pin.framesForwardKinematics(model, data, q)
             current_to_target = data.oMf[tool_id].actInv(target)
             error = pin.log6(current_to_target).vector
-            linear, angular = error[:3], error[3:]
-            if linear @ linear < position_limit and angular @ angular < rotation_limit:
-                return IkResult(q, True, math.sqrt(linear @ linear), math.sqrt(angular @ angular), iteration)
+            # The check in plain floats: one conversion instead of four numpy calls.
+            ex, ey, ez, ea, eb, ec = error.tolist()
+            linear2, angular2 = ex * ex + ey * ey + ez * ez, ea * ea + eb * eb + ec * ec
+            if linear2 < position_limit and angular2 < rotation_limit:
+                return IkResult(q, True, math.sqrt(linear2), math.sqrt(angular2), iteration)
             if iteration == max_iterations:
                 break
             jac = pin.computeFrameJacobian(model, data, q, tool_id, pin.LOCAL)
