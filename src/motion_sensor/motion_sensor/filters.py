@@ -10,7 +10,7 @@ from motion_common.params import Param, ParamSchema
 from .errors import MotionSensorError
 
 
-def average_quaternions(quats: np.ndarray) -> np.ndarray:
+def average_quaternions(quats) -> np.ndarray:
     """Mean rotation of quaternions (x, y, z, w) rows, as a unit quaternion.
 
     Markley's method: the principal eigenvector of sum(q q^T). It is blind to the sign of
@@ -18,35 +18,39 @@ def average_quaternions(quats: np.ndarray) -> np.ndarray:
     """
     quats = np.asarray(quats, dtype=float)
     gram = quats.T @ quats
-    mean = _principal_vector(gram, quats[-1])
+    newest = quats[-1].tolist()
+    mean = _principal_vector(gram.tolist(), newest)
     if mean is None:  # no clear principal direction (quaternions spread widely): exact solver
         _, vectors = np.linalg.eigh(gram)
-        mean = vectors[:, -1]
+        mean = vectors[:, -1].tolist()
     # Keep the sign of the newest sample so consecutive outputs do not flip sign.
-    if mean @ quats[-1] < 0:
-        mean = -mean
-    return mean / math.sqrt(mean @ mean)
+    if sum(m * n for m, n in zip(mean, newest)) < 0:
+        mean = [-m for m in mean]
+    norm = math.sqrt(sum(m * m for m in mean))
+    return np.array([m / norm for m in mean])
 
 
-def _principal_vector(gram: np.ndarray, start: np.ndarray, iterations: int = 50):
-    """Principal eigenvector of the 4x4 ``gram`` by power iteration from ``start``, or None
-    when it has not converged within ``iterations``.
+def _principal_vector(gram, start, iterations: int = 50):
+    """Principal eigenvector (a list) of the 4x4 ``gram`` (nested lists) by power iteration
+    from ``start``, or None when it has not converged within ``iterations``.
 
     Frames of one hand a few milliseconds apart are close rotations, so the principal
     eigenvalue dwarfs the others and a handful of iterations reach float precision. This
-    runs on every frame of the stream, and a few 4x4 products cost less there than LAPACK's
-    eigh, whose large code is cold after the pause between two frames (bench/e2e_latency).
+    runs on every frame of the stream: plain floats, since after the pause between two
+    frames a numpy call on a 4-vector costs several times its arithmetic, and LAPACK's eigh
+    more still (bench/e2e_latency).
     """
-    v = start / math.sqrt(start @ start)
+    norm = math.sqrt(sum(x * x for x in start))
+    v = [x / norm for x in start]
     for _ in range(iterations):
-        w = gram @ v
-        norm = math.sqrt(w @ w)
+        w = [row[0] * v[0] + row[1] * v[1] + row[2] * v[2] + row[3] * v[3] for row in gram]
+        norm = math.sqrt(sum(x * x for x in w))
         if norm == 0.0:
             return None
-        w = w / norm
-        change = w - v
+        w = [x / norm for x in w]
+        change = sum((x - y) * (x - y) for x, y in zip(w, v))
         v = w
-        if change @ change < 1e-24:
+        if change < 1e-24:
             return v
     return None
 
@@ -69,10 +73,12 @@ class MeanFilter:
     def update(self, stamp: float, position: np.ndarray, orientation: np.ndarray):
         """Add a pose and return the filtered (position, orientation)."""
         del stamp  # a moving average is rate-blind by definition
-        self._positions.append(np.asarray(position, dtype=float))
-        self._orientations.append(np.asarray(orientation, dtype=float))
-        # sum()/len: a dozen 3-vector additions cost less than np.mean's array building.
-        return sum(self._positions) / len(self._positions), average_quaternions(np.array(self._orientations))
+        # Plain floats (every frame, on its latency): see _principal_vector.
+        self._positions.append([float(v) for v in position])
+        self._orientations.append([float(v) for v in orientation])
+        count = len(self._positions)
+        mean_position = np.array([sum(axis) / count for axis in zip(*self._positions)])
+        return mean_position, average_quaternions(self._orientations)
 
 
 FILTERS = {"mean": MeanFilter}

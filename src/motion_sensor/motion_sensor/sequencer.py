@@ -297,7 +297,8 @@ class Sequencer:
             self._restart_hand(continuity=False)
         self._since_entry += 1
         if self._since_entry <= self.config.entry_trim_frames:
-            self._last_accepted = (sample.stamp, np.asarray(sample.position, float), np.asarray(sample.orientation, float))
+            self._last_accepted = (sample.stamp, [float(v) for v in sample.position],
+                                   [float(v) for v in sample.orientation])
             return self._drop("entry_trim")
         if self._is_jump(sample):
             return self._drop("jump")
@@ -343,20 +344,20 @@ class Sequencer:
         self._hand_key = None
 
     def _is_jump(self, sample: HandSample) -> bool:
-        position = np.asarray(sample.position, dtype=float)
-        orientation = np.asarray(sample.orientation, dtype=float)
+        # Plain floats: this runs on every frame's latency (see validate_sample).
+        position = [float(v) for v in sample.position]
+        orientation = [float(v) for v in sample.orientation]
         if self._last_accepted is None:
             self._last_accepted = (sample.stamp, position, orientation)
             return False
         stamp, last_position, last_orientation = self._last_accepted
-        moved = position - last_position
-        distance = math.sqrt(moved @ moved)
-        angle = 2.0 * math.acos(min(abs(float(orientation @ last_orientation)), 1.0))
+        distance = _distance(position, last_position)
+        dot = sum(a * b for a, b in zip(orientation, last_orientation))
+        angle = 2.0 * math.acos(min(abs(dot), 1.0))
         quick = sample.stamp - stamp <= self.config.jump_window_s
         if quick and (distance > self.config.jump_distance_m or angle > self.config.jump_angle_rad):
             # A real move shows up as frames that agree with each other at the new place.
-            if self._jump_candidates and np.linalg.norm(position - self._jump_candidates[-1]) > \
-                    self.config.jump_distance_m:
+            if self._jump_candidates and _distance(position, self._jump_candidates[-1]) > self.config.jump_distance_m:
                 self._jump_candidates = []
             self._jump_candidates.append(position)
             if len(self._jump_candidates) < self.config.jump_accept_after:
@@ -376,14 +377,21 @@ class Sequencer:
             self._offset_position = last.position - position
             self._offset_rotation = _quat_multiply(last.orientation, _quat_conjugate(orientation))
             self._continuity_pending = False
-        position = position + self._offset_position
-        orientation = _quat_multiply(self._offset_rotation, orientation)
-        orientation = orientation / math.sqrt(orientation @ orientation)
+        # Plain floats for the offsets (every frame), one array each at the end.
+        position = np.array([p + o for p, o in zip(position.tolist(), self._offset_position.tolist())])
+        x, y, z, w = _quat_multiply_floats(self._offset_rotation.tolist(), orientation.tolist())
+        norm = math.sqrt(x * x + y * y + z * z + w * w)
+        orientation = np.array([x / norm, y / norm, z / norm, w / norm])
         out = SequencedPose(sample.stamp, position, orientation, sample.frame_id, sample.primary_type,
                             sample.hands_num, sample.device)
         self._last_output = out
         self.counters["frames_out"] += 1
         return out
+
+
+def _distance(a, b) -> float:
+    """Euclidean distance of two 3-sequences of floats."""
+    return math.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
 
 
 def _quat_conjugate(q: np.ndarray) -> np.ndarray:
@@ -392,9 +400,14 @@ def _quat_conjugate(q: np.ndarray) -> np.ndarray:
 
 def _quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product of quaternions (x, y, z, w)."""
+    return np.array(_quat_multiply_floats(a, b))
+
+
+def _quat_multiply_floats(a, b) -> tuple:
+    """Hamilton product of quaternions (x, y, z, w), as a tuple of floats."""
     ax, ay, az, aw = a
     bx, by, bz, bw = b
-    return np.array([aw * bx + ax * bw + ay * bz - az * by,
-                     aw * by - ax * bz + ay * bw + az * bx,
-                     aw * bz + ax * by - ay * bx + az * bw,
-                     aw * bw - ax * bx - ay * by - az * bz])
+    return (aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+            aw * bw - ax * bx - ay * by - az * bz)
