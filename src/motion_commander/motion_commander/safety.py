@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motion_common.kinematics import singular_values
+
 from .errors import MotionCommanderError
 
 
@@ -202,7 +204,7 @@ def condition_number(jacobian) -> float:
     The translational rows alone miss wrist and elbow singularities of arms whose wrist
     offsets still give translation, so all six rows are used.
     """
-    singular = np.linalg.svd(np.asarray(jacobian), compute_uv=False)
+    singular = singular_values(np.asarray(jacobian, dtype=float))
     return float(singular[0] / singular[-1]) if singular[-1] > 1e-12 else float("inf")
 
 

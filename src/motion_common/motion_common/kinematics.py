@@ -7,8 +7,28 @@ from typing import Optional
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import lapack
 
 from .errors import RobotModelError
+
+
+def solve_positive_definite(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
+    """``matrix``^-1 ``vector`` for a symmetric positive definite matrix, by Cholesky.
+
+    LAPACK's dposv through scipy's thin wrapper: on the per-frame path, after the idle
+    between frames, np.linalg.solve's Python-level checks cost more than the 6x6 solve
+    (~180 against ~90 us with cold caches; issue 14). LU (np.linalg.solve) is the fallback
+    when the matrix is not positive definite to working precision.
+    """
+    _, solution, info = lapack.dposv(matrix, vector)
+    return solution if info == 0 else np.linalg.solve(matrix, vector)
+
+
+def singular_values(matrix: np.ndarray) -> np.ndarray:
+    """Singular values of ``matrix``, largest first (LAPACK dgesdd through scipy's thin
+    wrapper, for the same reason as solve_positive_definite; np.linalg.svd as fallback)."""
+    values, info = lapack.dgesdd(matrix, compute_uv=0)[1::2]
+    return values if info == 0 else np.linalg.svd(matrix, compute_uv=False)
 
 
 def pose_to_se3(position, orientation) -> pin.SE3:
@@ -153,7 +173,7 @@ class RobotKinematics:
             jac = pin.computeFrameJacobian(model, data, q, tool_id, pin.LOCAL)
             jac = pin.Jlog6(current_to_target.inverse()) @ jac
             # Damping keeps the step bounded near singularities instead of exploding.
-            step = jac.T @ np.linalg.solve(jac @ jac.T + damping_eye, error)
+            step = jac.T @ solve_positive_definite(jac @ jac.T + damping_eye, error)
             q = np.minimum(np.maximum(pin.integrate(model, q, step), lower), upper)
         return IkResult(q, False, float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:])), max_iterations)
 
