@@ -4,7 +4,8 @@ import pytest
 
 from conftest import HOME, UR10E, UR5E
 from motion_common.errors import RobotModelError
-from motion_common.kinematics import RobotKinematics, pose_to_se3, se3_to_pose
+from motion_common.kinematics import (RobotKinematics, pose_to_se3, se3_to_pose, singular_values,
+                                      solve_positive_definite)
 
 
 @pytest.fixture(scope="module")
@@ -94,3 +95,23 @@ def test_ik_round_trip_on_every_shipped_robot(urdf, home, rng):
         goal = home + rng.uniform(-0.3, 0.3, 6)
         result = kin.solve_ik(kin.forward(goal), goal + rng.uniform(-0.05, 0.05, 6))
         assert result.success and kin.within_limits(result.joints)
+
+
+def test_positive_definite_solve_matches_lu_and_falls_back_when_not_definite():
+    rng = np.random.default_rng(3)
+    jac = rng.normal(size=(6, 6))
+    spd = jac @ jac.T + 1e-4 * np.eye(6)
+    vector = rng.normal(size=6)
+    np.testing.assert_allclose(solve_positive_definite(spd, vector), np.linalg.solve(spd, vector), rtol=1e-9)
+    # Symmetric but indefinite: Cholesky fails, LU still answers correctly.
+    indefinite = np.diag([2.0, -1.0, 3.0, 1.0, -4.0, 5.0])
+    solution = solve_positive_definite(indefinite, vector)
+    np.testing.assert_allclose(indefinite @ solution, vector, rtol=1e-12)
+
+
+def test_singular_values_match_numpy_largest_first():
+    rng = np.random.default_rng(4)
+    matrix = rng.normal(size=(6, 6))
+    values = singular_values(matrix)
+    np.testing.assert_allclose(values, np.linalg.svd(matrix, compute_uv=False), rtol=1e-12)
+    assert values[0] >= values[-1] > 0

@@ -30,6 +30,21 @@ def test_displacement_is_scaled_and_rotated_into_robot_frame():
     np.testing.assert_allclose(position, [1.0, 0.1, 0.02], atol=1e-12)
 
 
+def test_rotation_mapping_with_a_rotated_device_matches_the_definition():
+    # Target = H (R_hand R_hand0^-1) H^-1 R_tool0, with H the device's rotation in the
+    # robot frame: checked against scipy on random poses (the mapper uses plain floats).
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        device, hand0, tool0, hand = (Rotation.from_quat(q) for q in rng.normal(size=(4, 4)))
+        mapper = TeleopMapper(speed_ratio=0.7, hand_to_robot=device.as_matrix())
+        hand0_p, tool0_p, hand_p = rng.normal(size=(3, 3))
+        mapper.engage(hand0_p, hand0.as_quat(), tool0_p, tool0.as_quat())
+        position, orientation = mapper.target(hand_p, hand.as_quat())
+        expected = device * hand * hand0.inv() * device.inv() * tool0
+        assert (Rotation.from_quat(orientation) * expected.inv()).magnitude() < 1e-9
+        np.testing.assert_allclose(position, tool0_p + 0.7 * device.apply(hand_p - hand0_p), atol=1e-12)
+
+
 def test_hand_rotation_turns_the_tool_the_same_way():
     mapper = TeleopMapper()
     tool_r = Rotation.from_euler("x", np.pi)
