@@ -8,6 +8,7 @@ A LATCHED STOP (``latch_stop`` / ``release_stop``) reaches every client at once:
 robot stops, a blocking move in progress answers INTERRUPTED, and every motion command
 (SET_JOINTS, MOVE_J, MOVE_L) is refused with LATCHED_STOP until it is released.
 """
+import math
 import threading
 import time
 from dataclasses import dataclass, field
@@ -218,27 +219,30 @@ class CommandDispatcher:
     def _check_joints(self, command, joints, dof):
         if len(joints) != dof:
             return Result.WRONG_LENGTH, f"joints needs {dof} values for this robot, got {len(joints)}"
-        # Every streamed command passes here: ndarray methods (.all, .any, .max) rather than
-        # the np.* wrappers, whose dispatch costs more than these 6-element checks.
-        q = np.asarray(joints, dtype=float)
-        if not np.isfinite(q).all():
-            return Result.NOT_FINITE, f"joints contains NaN or inf: {q.tolist()}"
+        # Every streamed command passes here, on its latency: plain floats, since a numpy
+        # call on a 6-vector costs several times this arithmetic when the caches are cold
+        # between two commands (bench/e2e_latency, issue 14).
+        q = [float(v) for v in joints]
+        if not all(map(math.isfinite, q)):
+            return Result.NOT_FINITE, f"joints contains NaN or inf: {q}"
         lower, upper = self.driver.joint_limits
-        outside = (q < lower) | (q > upper)
-        if outside.any():
-            names = [self.driver.joint_names[i] for i in np.flatnonzero(outside)]
+        outside = [i for i, (v, low, high) in enumerate(zip(q, _float_list(lower), _float_list(upper)))
+                   if v < low or v > high]
+        if outside:
+            names = [self.driver.joint_names[i] for i in outside]
             return Result.JOINT_LIMIT, f"joints {names} outside their limits"
         if command == CommandIndex.SET_JOINTS:
-            current = self.driver.get_robot_joints()
+            current = _float_list(self.driver.get_robot_joints())
             with self._stream_lock:
                 fresh = self._clock() - self._stream_time <= STREAM_REFERENCE_TIMEOUT
                 reference = self._stream_reference if fresh and self._stream_reference is not None else None
             against = "the last streamed target" if reference is not None else "the robot"
-            step = float(np.abs(q - (current if reference is None else reference)).max())
+            base = current if reference is None else _float_list(reference)
+            step = max(abs(v - b) for v, b in zip(q, base))
             if step > self.max_stream_step:
                 return Result.TOO_FAR, (f"SET_JOINTS target is {step:.3f} rad from {against} (limit "
                                         f"{self.max_stream_step:.3f}); use MOVE_J for large motions")
-            lag = float(np.abs(q - current).max())
+            lag = max(abs(v - c) for v, c in zip(q, current))
             if lag > self.max_stream_lag:
                 return Result.TOO_FAR, (f"SET_JOINTS target is {lag:.3f} rad ahead of the robot (limit "
                                         f"{self.max_stream_lag:.3f}): the robot is not following the stream; "
@@ -321,3 +325,8 @@ class CommandDispatcher:
         except Exception:  # the state is a courtesy; the result code already says it all
             pass
         return answer
+
+
+def _float_list(values) -> list:
+    """``values`` (an array, as the driver template returns, or any sequence) as floats."""
+    return values.tolist() if isinstance(values, np.ndarray) else [float(v) for v in values]
