@@ -188,6 +188,42 @@ def idle_wake_penalty(gap=0.009):
     return figures
 
 
+GC_PROBE = """
+import gc, json, time
+import rospy
+from motion_common.kinematics import RobotKinematics
+from motion_commander.teleop_core import TeleopCore
+from motion_commander.srv import commander
+from motion_sensor.msg import hand
+from hw_interface.controller_client import MotionControllerClient
+from motion_common.startup_heap import freeze_startup_heap
+RobotKinematics(URDF)
+
+def full_collection_ms():
+    samples = []
+    for _ in range(5):
+        start = time.perf_counter()
+        gc.collect()
+        samples.append(time.perf_counter() - start)
+    return round(sorted(samples)[2] * 1000, 3)
+
+before = full_collection_ms()
+freeze_startup_heap()
+print(json.dumps({"start-up objects": gc.get_freeze_count(), "full collection before": before,
+                  "after freeze_startup_heap": full_collection_ms()}))
+"""
+
+
+def garbage_collector_pauses():
+    """A full garbage collection's pause (ms, median of 5) in a fresh interpreter with the
+    core node's imports and robot model, before and after freeze_startup_heap(). A long
+    session runs into such collections as long-lived objects accumulate."""
+    urdf = os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf")
+    output = subprocess.run([sys.executable, "-c", f"URDF = {urdf!r}\n" + GC_PROBE], check=True,
+                            capture_output=True, text=True).stdout
+    return json.loads(output.strip().splitlines()[-1])
+
+
 def breakdown(master, count):
     """Floor variants (one ingredient each), serialisation and the idle-wake penalty."""
     rows = {}
@@ -203,7 +239,8 @@ def breakdown(master, count):
                           "added_p50": None if variant in ("floor",) else round(server["p50"] - base["p50"], 3),
                           "added_p99": None if variant in ("floor",) else round(server["p99"] - base["p99"], 3),
                           "hops": hops}
-    return {"variants": table, "serialisation_us": serialisation_costs(), "core_idle_wake": idle_wake_penalty()}
+    return {"variants": table, "serialisation_us": serialisation_costs(), "core_idle_wake": idle_wake_penalty(),
+            "gc_pause_ms": garbage_collector_pauses()}
 
 
 def print_breakdown(result):
@@ -214,6 +251,7 @@ def print_breakdown(result):
     print(f"  serialise + deserialise, us per message (hot): {result['serialisation_us']}")
     idle = result["core_idle_wake"]
     print(f"  core per frame (TeleopCore), us: {idle}")
+    print(f"  full garbage collection in the core's process, ms: {result['gc_pause_ms']}")
 
 
 def plot(results, path):

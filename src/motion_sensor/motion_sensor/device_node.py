@@ -22,6 +22,7 @@ from std_msgs.msg import Bool
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema
 from motion_common.ros_params import load_private_params
+from motion_common.startup_heap import freeze_startup_heap
 
 from .device import Backoff, DeviceRunner, HandDevice, wait_until_ready
 from .errors import MotionSensorError
@@ -155,7 +156,9 @@ class DeviceNode:
 def run_device_node(device_cls, node_name: str) -> None:
     """The whole life of a device node: init, parameters, readiness, stream, exit."""
     rospy.init_node(node_name)
-    spin_device_node(DeviceNode(device_cls, node_name))
+    node = DeviceNode(device_cls, node_name)
+    freeze_startup_heap()
+    spin_device_node(node)
 
 
 def spin_device_node(node: DeviceNode) -> None:
