@@ -6,7 +6,6 @@ target is the reference tool pose moved by the hand's displacement (scaled by th
 ratio) and rotated by the hand's rotation since engage. Because the first target equals the
 current tool pose, engaging never makes the robot jump.
 """
-import math
 from typing import Optional
 
 import numpy as np
@@ -66,8 +65,7 @@ class TeleopMapper:
         tool_p0, tool_r0 = self._tool_ref
         self._hand_p0 = hand_p0.tolist()
         self._tool_p0 = tool_p0.tolist()
-        self._rotation_after = (hand_r0.T @ self.hand_to_robot.T @ tool_r0).tolist()
-        self._hand_to_robot = self.hand_to_robot.tolist()
+        self._rotation_after = hand_r0.T @ self.hand_to_robot.T @ tool_r0
 
     def disengage(self) -> None:
         """Drop the reference; target() is unavailable until the next engage()."""
@@ -103,45 +101,24 @@ class TeleopMapper:
         takes, without a round trip through a quaternion on every frame."""
         if not self.engaged:
             raise MotionCommanderError("teleop is not engaged; call engage() first")
-        # Every frame, on its latency: plain floats and two arrays built at the end. A numpy
-        # call on a 3-vector costs ~6 us after the idle between frames (cold caches), several
-        # times the arithmetic itself (bench/e2e_latency --breakdown, issue 14).
+        # Every frame, on its latency: the position in plain floats (a numpy call on a
+        # 3-vector costs ~6 us after the idle between frames, several times the arithmetic;
+        # bench/e2e_latency --breakdown, issue 14), one array built at the end.
         hand = [float(v) for v in hand_position]
         self._last_hand = hand
         displacement = [h - h0 for h, h0 in zip(hand, self._hand_p0)]
         if not self._aligned:
-            displacement = _matrix_vector(self._hand_to_robot, displacement)
+            displacement = (self.hand_to_robot @ displacement).tolist()
         ratio = self.speed_ratio
         position = np.array([t0 + ratio * d for t0, d in zip(self._tool_p0, displacement)])
         if not self.follow_orientation:
             return position, self._tool_ref[1]
         # The hand's rotation since engage, re-expressed in the robot base frame, is applied
         # to the tool in the base frame, so turning the hand turns the tool the same way.
-        rotation = _matrix_product(_quaternion_matrix(hand_orientation), self._rotation_after)
+        rotation = quat_to_matrix(hand_orientation) @ self._rotation_after
         if not self._aligned:
-            rotation = _matrix_product(self._hand_to_robot, rotation)
-        return position, np.array(rotation)
-
-
-def _quaternion_matrix(quaternion) -> list:
-    """3x3 rotation matrix (nested lists) of a quaternion (x, y, z, w), normalised first."""
-    x, y, z, w = (float(v) for v in quaternion)
-    n = 1.0 / math.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x * n, y * n, z * n, w * n
-    return [[1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)],
-            [2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)],
-            [2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)]]
-
-
-def _matrix_product(a, b) -> list:
-    """a @ b of 3x3 nested lists."""
-    columns = list(zip(*b))
-    return [[row[0] * col[0] + row[1] * col[1] + row[2] * col[2] for col in columns] for row in a]
-
-
-def _matrix_vector(a, v) -> list:
-    """a @ v of a 3x3 nested list and a 3-list."""
-    return [row[0] * v[0] + row[1] * v[1] + row[2] * v[2] for row in a]
+            rotation = self.hand_to_robot @ rotation
+        return position, rotation
 
 
 class AutoClutch:
