@@ -54,6 +54,27 @@ def test_ik_on_a_continuous_path_converges_every_step(ur5e):
         q = result.joints
 
 
+def test_a_prepared_seed_gives_the_solve_of_the_seed_itself(ur5e, rng):
+    # The teleop core prepares the IK's first step at its seed before the frame arrives;
+    # the solve must come out exactly as without it, also for a seed outside the limits
+    # (clipped first) and for targets needing several iterations.
+    iterations = set()
+    for k in range(40):
+        seed = HOME + rng.uniform(-0.3, 0.3, 6)
+        if k == 0:
+            seed[1] = ur5e.upper[1] + 0.5   # outside the limits: the prepared seed is clipped too
+        target = ur5e.forward(seed + rng.uniform(-0.08, 0.08, 6))
+        plain = ur5e.solve_ik(target, seed)
+        prepared = ur5e.solve_ik(target, seed, prepared=ur5e.prepare_seed(seed))
+        assert prepared.success == plain.success and prepared.iterations == plain.iterations
+        np.testing.assert_array_equal(prepared.joints, plain.joints)
+        iterations.add(plain.iterations)
+    assert len(iterations) >= 2, "every solve took the same path: the test shows little"
+    # Already at the target: the prepared pose alone answers, with no iteration.
+    result = ur5e.solve_ik(ur5e.forward(HOME), HOME, prepared=ur5e.prepare_seed(HOME))
+    assert result.success and result.iterations == 0
+
+
 def test_unreachable_target_fails_inside_limits(ur5e):
     result = ur5e.solve_ik(pose_to_se3([3.0, 0.0, 0.5], [0, 0, 0, 1]), HOME)
     assert not result.success and result.position_error > 1.0

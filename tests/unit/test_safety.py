@@ -222,12 +222,13 @@ def test_carried_and_prepared_command_figures_give_the_same_commands_as_recomput
     runs = []
     for recompute, prepare in ((False, False), (True, False), (False, True)):
         core = make_core(joint_speed_scale=1.0, joint_acceleration=200.0)
-        sequencer, commands, carried = Sequencer(), [], 0
+        sequencer, commands, carried, seeded = Sequencer(), [], 0, 0
         for frame in frames:
             sample = frame_to_sample(frame, frame.timestamp)
             pose = None if sample is None else sequencer.process(sample, now=frame.timestamp)
             if pose is None:
                 continue
+            seeded += core._prepared_seed is not None
             if recompute:
                 core._command_condition = None
             elif core._command_condition is not None:
@@ -239,11 +240,13 @@ def test_carried_and_prepared_command_figures_give_the_same_commands_as_recomput
                 if prepare:  # as the node does once the command is out
                     core.prepare_next()
                     assert core._command_condition is not None and core._command_pose is not None
-        runs.append((np.array(commands), carried))
-    (carried_run, carried_frames), (recomputed_run, _), (prepared_run, _) = runs
+        runs.append((np.array(commands), carried, seeded))
+    (carried_run, carried_frames, _), (recomputed_run, _, _), (prepared_run, _, seeded_frames) = runs
     assert len(carried_run) > 300 and carried_frames > 100, "the cache was never used: the test shows nothing"
+    assert seeded_frames > 300, "the IK's prepared seed step was never used: the test shows nothing"
     np.testing.assert_allclose(carried_run, recomputed_run, rtol=0, atol=1e-9)
-    # Computing the command's condition number and pose between frames changes nothing either.
+    # Computing the command's condition number and pose and the IK's first step at its seed
+    # between frames changes nothing either.
     np.testing.assert_allclose(prepared_run, recomputed_run, rtol=0, atol=1e-9)
 
 

@@ -62,6 +62,8 @@ _NODE = [
     Param("urdf", "", doc="robot URDF path (set by the launch file)"),
     Param("ready_timeout_s", 60.0, "s", "how long to wait for the robot server before giving up", low=0.0,
           high=3600.0, low_open=True),
+    Param("prepare_lead_s", 0.0015, "s", "before the next frame is due, the core prepares its pose-independent "
+          "work (0: right after each command)", low=0.0, high=0.05),
 ]
 #: Every parameter of the motion_commander node, with units and ranges.
 TELEOP_PARAMETERS = ParamSchema(_MAPPING + _SAFETY + _NODE, ignore=("config_file",))

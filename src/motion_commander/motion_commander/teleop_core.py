@@ -112,6 +112,9 @@ class TeleopCore:
         self._command_pose = None
         # The previous frame's IK solution (the unlimited goal): the next IK starts there.
         self._last_goal: Optional[np.ndarray] = None
+        # That IK's first step at its seed (pose, Jacobian), done by prepare_next() ahead of
+        # the frame; None: not done yet, the frame does it.
+        self._prepared_seed = None
         self._command_stamp: Optional[float] = None
         self._halted = False
 
@@ -197,19 +200,31 @@ class TeleopCore:
         self._command_condition = None
         self._command_pose = None
         self._last_goal = None
+        self._prepared_seed = None
         self._command_stamp = stamp
         self._halted = False
         self.limiter.reset()
         self.ramp.start(stamp)
 
     def prepare_next(self) -> None:
-        """Compute, between frames, what the next frame needs about the current command (its
-        Jacobian condition number and tool pose), so that the next frame's command leaves
-        sooner. Optional: the next frame computes whatever is still missing itself."""
+        """Compute, between frames, what the next frame needs that does not depend on its
+        hand pose: the current command's Jacobian condition number and tool pose, and the
+        first step of the next IK at its seed. The next frame's command then leaves sooner,
+        and is the same as without it. Optional: the next frame computes whatever is still
+        missing itself."""
         if self._command is None or not self.mapper.engaged:
             return
         self._condition_at_command()
         self._pose_at_command()
+        if self._prepared_seed is None:
+            self._prepared_seed = self.kinematics.prepare_seed(self._ik_seed())
+
+    def _ik_seed(self) -> np.ndarray:
+        # The previous frame's IK solution: the hand moved little since, so one iteration
+        # usually converges, while the command may lag far behind under the speed limits.
+        # Both seeds lie on the same continuous branch (each solution started from the one
+        # before, back to the measured joints at engage).
+        return self._command if self._last_goal is None else self._last_goal
 
     def _condition_at_command(self) -> float:
         """Jacobian condition number at the current command, computed once per command."""
@@ -243,17 +258,14 @@ class TeleopCore:
         target_position, fenced = self.fence.clamp(target_position)
         if fenced:
             flags.append(TeleopStatus.WORKSPACE_LIMIT)
-        # Seeded with the previous frame's IK solution: the hand moved little since, so one
-        # iteration usually converges, while the command may lag far behind under the speed
-        # limits. Both seeds lie on the same continuous branch (each solution started from
-        # the one before, back to the measured joints at engage).
-        seed = self._command if self._last_goal is None else self._last_goal
-        result = self.kinematics.solve_ik(pin.SE3(target_rotation, target_position), seed)
+        result = self.kinematics.solve_ik(pin.SE3(target_rotation, target_position), self._ik_seed(),
+                                          prepared=self._prepared_seed)
         if not result.success:
             self.status = TeleopStatus.IK_FAILED
             return None
         joints, clipped = self.margin.apply(result.joints)
         self._last_goal = joints
+        self._prepared_seed = None
         if clipped:
             flags.append(TeleopStatus.JOINT_LIMIT_MARGIN)
         fraction = self.ramp.fraction(stamp)

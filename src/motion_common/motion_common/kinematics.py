@@ -80,6 +80,18 @@ class LinePath:
 
 
 @dataclass
+class PreparedSeed:
+    """What an IK solve computes first at its seed, computed ahead of time
+    (RobotKinematics.prepare_seed): the seed clipped to the joint limits, the tool pose there
+    and the tool Jacobian in the LOCAL frame. A teleop frame's IK starts from a seed known
+    before the frame arrives, so this work can leave the frame's latency."""
+
+    joints: np.ndarray
+    tool_pose: pin.SE3
+    local_jacobian: np.ndarray
+
+
+@dataclass
 class IkResult:
     """Outcome of an IK solve: joints, whether the tolerance was met, residual error."""
 
@@ -142,26 +154,41 @@ class RobotKinematics:
         q = np.asarray(joints, dtype=float)
         return bool(np.all(q >= self.lower + margin) and np.all(q <= self.upper - margin))
 
+    def prepare_seed(self, seed) -> PreparedSeed:
+        """The first step of solve_ik() at ``seed`` (clip, tool pose, LOCAL Jacobian), to be
+        passed to solve_ik(..., prepared=) later: the solve then gives exactly the result it
+        would give from ``seed``, with that work done beforehand."""
+        q = np.minimum(np.maximum(np.asarray(seed, dtype=float), self.lower), self.upper)
+        jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.tool_id, pin.LOCAL)
+        return PreparedSeed(q, self.forward(q), jacobian)
+
     def solve_ik(self, target: pin.SE3, seed, max_iterations: int = 50, position_tolerance: float = 1e-4,
-                 rotation_tolerance: float = 1e-3, damping: float = 1e-4) -> IkResult:
+                 rotation_tolerance: float = 1e-3, damping: float = 1e-4,
+                 prepared: Optional[PreparedSeed] = None) -> IkResult:
         """Damped-least-squares IK toward ``target`` starting at ``seed`` (warm start).
 
         Each step is clipped to the joint limits, so the result is always inside them; when
         the target is unreachable the closest solution found is returned with success False.
+        ``prepared`` (prepare_seed() of this same seed) skips the work done there.
         """
         # This runs once or twice per teleop frame, on the latency-critical path: plain
         # dot products and preallocated arrays, since numpy's per-call overhead (norm, clip,
         # eye) costs more than the 6x6 arithmetic itself.
         model, data, tool_id, lower, upper = self.model, self.data, self.tool_id, self.lower, self.upper
-        q = np.minimum(np.maximum(np.asarray(seed, dtype=float), lower), upper)
+        if prepared is not None:
+            q, tool_pose, prepared_jacobian = prepared.joints, prepared.tool_pose, prepared.local_jacobian
+        else:
+            q = np.minimum(np.maximum(np.asarray(seed, dtype=float), lower), upper)
         damping_eye = self._damping_eyes.get(damping)
         if damping_eye is None:
             damping_eye = self._damping_eyes[damping] = damping * np.eye(6)
         position_limit, rotation_limit = position_tolerance ** 2, rotation_tolerance ** 2
         error = np.zeros(6)
         for iteration in range(max_iterations + 1):
-            pin.framesForwardKinematics(model, data, q)
-            current_to_target = data.oMf[tool_id].actInv(target)
+            if prepared is None or iteration:
+                pin.framesForwardKinematics(model, data, q)
+                tool_pose = data.oMf[tool_id]
+            current_to_target = tool_pose.actInv(target)
             error = pin.log6(current_to_target).vector
             # The check in plain floats: one conversion instead of four numpy calls.
             ex, ey, ez, ea, eb, ec = error.tolist()
@@ -170,7 +197,10 @@ class RobotKinematics:
                 return IkResult(q, True, math.sqrt(linear2), math.sqrt(angular2), iteration)
             if iteration == max_iterations:
                 break
-            jac = pin.computeFrameJacobian(model, data, q, tool_id, pin.LOCAL)
+            if prepared is not None and not iteration:
+                jac = prepared_jacobian
+            else:
+                jac = pin.computeFrameJacobian(model, data, q, tool_id, pin.LOCAL)
             jac = pin.Jlog6(current_to_target.inverse()) @ jac
             # Damping keeps the step bounded near singularities instead of exploding.
             step = jac.T @ solve_positive_definite(jac @ jac.T + damping_eye, error)
