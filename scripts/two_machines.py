@@ -177,8 +177,9 @@ def run_monitored_session(recording, log_dir, port=PORT, timeout=180.0, repeat=1
     os.makedirs(out, exist_ok=True)
     with TwoMachines(log_dir, port) as pair:
         monitor, = start_session(pair, recording, watchers=[(
-            "session_monitor", ["rosrun", "motion_commander", "session_monitor", f"_output_dir:={out}",
-                                "_title:=two machines, " + os.path.basename(recording)])],
+            # nice 19, as in teleop_sim.launch: the observer never takes a core from the chain.
+            "session_monitor", ["nice", "-n", "19", "rosrun", "motion_commander", "session_monitor",
+                                f"_output_dir:={out}", "_title:=two machines, " + os.path.basename(recording)])],
             sensor_args=[f"repeat:={repeat}"])
         try:
             code = monitor.wait(timeout=timeout * repeat)
