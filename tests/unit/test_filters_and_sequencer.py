@@ -180,6 +180,33 @@ def test_highest_priority_device_drives_and_switching_does_not_jump():
     assert max(steps) < 0.002
 
 
+def test_a_device_switch_keeps_the_orientation_and_later_turns_apply_from_there():
+    # The second device sees the hand turned 90 degrees about z: the output must not turn
+    # at the switch, and a later 10-degree turn of that device must turn the output by
+    # exactly 10 degrees (the continuity offset is a rotation, applied on every frame).
+    seq = plain(device_priorities={"leap": 2, "spacemouse": 1}, device_timeout_s=0.05)
+    turned = Rotation.from_euler("z", 90, degrees=True)
+    t, last = 10.0, None
+    for _ in range(10):
+        t += 0.01
+        last = seq.process(sample(t, device="leap"), now=t)
+    for _ in range(12):  # the leap is gone; the spacemouse takes over
+        t += 0.01
+        out = seq.process(sample(t, orientation=turned.as_quat(), device="spacemouse"), now=t)
+        if out is not None:
+            step = Rotation.from_quat(out.orientation).inv() * Rotation.from_quat(last.orientation)
+            assert step.magnitude() < 1e-9
+            last = out
+    assert seq.counters["device_switches"] == 1
+    more = Rotation.from_euler("z", 100, degrees=True).as_quat()
+    for _ in range(12):  # the mean filter's window fills with the new orientation
+        t += 0.01
+        last = seq.process(sample(t, orientation=more, device="spacemouse"), now=t)
+    angle = (Rotation.from_quat(last.orientation) * Rotation.from_quat(IDENTITY).inv()).magnitude()
+    assert np.degrees(angle) == pytest.approx(10.0, abs=1e-6)
+    assert np.linalg.norm(last.orientation) == pytest.approx(1.0)
+
+
 def test_forced_device_and_frames_older_than_the_last_command():
     seq = plain(active_device="spacemouse")
     assert seq.process(sample(10.0, device="leap"), now=10.0) is None
@@ -252,6 +279,16 @@ def test_sequencer_drops_non_numeric_fields_as_malformed():
     bad = sample(10.0)
     bad.orientation = ["a", 0, 0, 1]  # as a hand-built sample might carry
     assert seq.process(bad, now=10.0) is None and seq.counters["dropped_malformed"] == 1
+
+
+def test_the_plain_float_gram_matrix_is_numpys():
+    from motion_sensor.filters import _gram, float_list
+    rng = np.random.default_rng(11)
+    quats = rng.normal(size=(10, 4))
+    np.testing.assert_allclose(_gram(quats.tolist()), quats.T @ quats, rtol=0, atol=1e-14)
+    assert float_list(np.array([1, 2])) == [1.0, 2.0] and all(type(v) is float for v in float_list((1, 2.5)))
+    with pytest.raises(ValueError):
+        average_quaternions([])
 
 
 def test_quaternion_mean_matches_the_exact_eigenvector_clustered_or_spread():

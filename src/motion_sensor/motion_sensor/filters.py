@@ -16,18 +16,48 @@ def average_quaternions(quats) -> np.ndarray:
     Markley's method: the principal eigenvector of sum(q q^T). It is blind to the sign of
     each quaternion (q and -q are the same rotation), so no sign alignment can go wrong.
     """
-    quats = np.asarray(quats, dtype=float)
-    gram = quats.T @ quats
-    newest = quats[-1].tolist()
-    mean = _principal_vector(gram.tolist(), newest)
+    rows = [float_list(q) for q in (quats.tolist() if isinstance(quats, np.ndarray) else quats)]
+    if not rows or any(len(q) != 4 for q in rows):
+        raise ValueError("average_quaternions needs one or more (x, y, z, w) rows")
+    gram = _gram(rows)
+    newest = rows[-1]
+    mean = _principal_vector(gram, newest)
     if mean is None:  # no clear principal direction (quaternions spread widely): exact solver
-        _, vectors = np.linalg.eigh(gram)
+        _, vectors = np.linalg.eigh(np.array(gram))
         mean = vectors[:, -1].tolist()
     # Keep the sign of the newest sample so consecutive outputs do not flip sign.
     if sum(m * n for m, n in zip(mean, newest)) < 0:
         mean = [-m for m in mean]
     norm = math.sqrt(sum(m * m for m in mean))
     return np.array([m / norm for m in mean])
+
+
+def float_list(values) -> list:
+    """``values`` as a list of Python floats: an array through one tolist() call (iterating
+    it yields numpy scalars, several times slower per element; the sequencer does this a few
+    times on every frame's latency)."""
+    return [float(v) for v in (values.tolist() if isinstance(values, np.ndarray) else values)]
+
+
+def _gram(rows) -> list:
+    """sum(q q^T) over quaternion rows (lists of 4 floats), as nested lists.
+
+    Plain floats, one pass: on the sequencer's per-frame path (10 rows), numpy's array
+    construction and product cost more than the 100 multiply-adds when the caches are cold
+    between frames (issue 14)."""
+    xx = xy = xz = xw = yy = yz = yw = zz = zw = ww = 0.0
+    for x, y, z, w in rows:
+        xx += x * x
+        xy += x * y
+        xz += x * z
+        xw += x * w
+        yy += y * y
+        yz += y * z
+        yw += y * w
+        zz += z * z
+        zw += z * w
+        ww += w * w
+    return [[xx, xy, xz, xw], [xy, yy, yz, yw], [xz, yz, zz, zw], [xw, yw, zw, ww]]
 
 
 def _principal_vector(gram, start, iterations: int = 50):
@@ -74,8 +104,8 @@ class MeanFilter:
         """Add a pose and return the filtered (position, orientation)."""
         del stamp  # a moving average is rate-blind by definition
         # Plain floats (every frame, on its latency): see _principal_vector.
-        self._positions.append([float(v) for v in position])
-        self._orientations.append([float(v) for v in orientation])
+        self._positions.append(float_list(position))
+        self._orientations.append(float_list(orientation))
         count = len(self._positions)
         mean_position = np.array([sum(axis) / count for axis in zip(*self._positions)])
         return mean_position, average_quaternions(self._orientations)

@@ -26,7 +26,7 @@ import numpy as np
 from .errors import MotionSensorError
 from motion_common.params import Param, ParamSchema
 
-from .filters import FILTER_PARAMS, FILTERS, make_filter
+from .filters import FILTER_PARAMS, FILTERS, float_list, make_filter
 from .hand_sample import HandSample
 
 # Drops that are the sequencer doing its job, not bad input: counted, never warned about.
@@ -144,7 +144,7 @@ def _floats(values, length: int):
     if getattr(values, "shape", (length,)) != (length,):  # an array of another shape (e.g. 3x1)
         return None
     try:
-        values = [float(v) for v in values]
+        values = float_list(values)
     except (TypeError, ValueError):  # not a flat sequence of numbers (e.g. nested)
         return None
     return values if len(values) == length else None
@@ -190,11 +190,13 @@ class DeviceBinder:
 
     def hear(self, device: str, now: float) -> bool:
         """Record a frame from ``device``; return whether it is the active device."""
-        self.last_heard.setdefault(device, now)
         self.last_heard[device] = now
         if self.forced:
             self.active = self.forced
             return device == self.forced
+        if len(self.last_heard) == 1:  # the usual single device: it drives (no search per frame)
+            self.active = device
+            return True
         alive = [d for d, t in self.last_heard.items() if now - t <= self.timeout]
         self.active = max(alive, key=lambda d: self.priorities.get(d, 0)) if alive else device
         return device == self.active
@@ -221,8 +223,9 @@ class Sequencer:
         self._last_accepted = None      # (stamp, position, orientation) of the last accepted raw frame
         self._jump_candidates = []
         self._delay = deque()
-        self._offset_position = np.zeros(3)
-        self._offset_rotation = np.array([0.0, 0.0, 0.0, 1.0])
+        # Continuity offsets (see _emit), plain floats: they are applied on every frame.
+        self._offset_position = [0.0, 0.0, 0.0]
+        self._offset_rotation = (0.0, 0.0, 0.0, 1.0)
         self._continuity_pending = False
         self._last_output: Optional[SequencedPose] = None
         self._active_device = None
@@ -297,8 +300,7 @@ class Sequencer:
             self._restart_hand(continuity=False)
         self._since_entry += 1
         if self._since_entry <= self.config.entry_trim_frames:
-            self._last_accepted = (sample.stamp, [float(v) for v in sample.position],
-                                   [float(v) for v in sample.orientation])
+            self._last_accepted = (sample.stamp, float_list(sample.position), float_list(sample.orientation))
             return self._drop("entry_trim")
         if self._is_jump(sample):
             return self._drop("jump")
@@ -345,8 +347,8 @@ class Sequencer:
 
     def _is_jump(self, sample: HandSample) -> bool:
         # Plain floats: this runs on every frame's latency (see validate_sample).
-        position = [float(v) for v in sample.position]
-        orientation = [float(v) for v in sample.orientation]
+        position = float_list(sample.position)
+        orientation = float_list(sample.orientation)
         if self._last_accepted is None:
             self._last_accepted = (sample.stamp, position, orientation)
             return False
@@ -371,15 +373,17 @@ class Sequencer:
 
     def _emit(self, sample: HandSample) -> SequencedPose:
         position, orientation = self.filter.update(sample.stamp, sample.position, sample.orientation)
+        position, orientation = position.tolist(), orientation.tolist()
         if self._continuity_pending:
             # Keep the output where it was: later motion is relative to here.
             last = self._last_output
-            self._offset_position = last.position - position
-            self._offset_rotation = _quat_multiply(last.orientation, _quat_conjugate(orientation))
+            self._offset_position = [a - b for a, b in zip(last.position.tolist(), position)]
+            qx, qy, qz, qw = orientation
+            self._offset_rotation = _quat_multiply_floats(last.orientation.tolist(), (-qx, -qy, -qz, qw))
             self._continuity_pending = False
         # Plain floats for the offsets (every frame), one array each at the end.
-        position = np.array([p + o for p, o in zip(position.tolist(), self._offset_position.tolist())])
-        x, y, z, w = _quat_multiply_floats(self._offset_rotation.tolist(), orientation.tolist())
+        position = np.array([p + o for p, o in zip(position, self._offset_position)])
+        x, y, z, w = _quat_multiply_floats(self._offset_rotation, orientation)
         norm = math.sqrt(x * x + y * y + z * z + w * w)
         orientation = np.array([x / norm, y / norm, z / norm, w / norm])
         out = SequencedPose(sample.stamp, position, orientation, sample.frame_id, sample.primary_type,
@@ -392,15 +396,6 @@ class Sequencer:
 def _distance(a, b) -> float:
     """Euclidean distance of two 3-sequences of floats."""
     return math.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
-
-
-def _quat_conjugate(q: np.ndarray) -> np.ndarray:
-    return np.array([-q[0], -q[1], -q[2], q[3]])
-
-
-def _quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product of quaternions (x, y, z, w)."""
-    return np.array(_quat_multiply_floats(a, b))
 
 
 def _quat_multiply_floats(a, b) -> tuple:
