@@ -282,7 +282,8 @@ def test_sequencer_drops_non_numeric_fields_as_malformed():
 
 
 def test_the_plain_float_gram_matrix_is_numpys():
-    from motion_sensor.filters import _gram, float_list
+    from motion_common.float_list import float_list
+    from motion_sensor.filters import _gram
     rng = np.random.default_rng(11)
     quats = rng.normal(size=(10, 4))
     np.testing.assert_allclose(_gram(quats.tolist()), quats.T @ quats, rtol=0, atol=1e-14)

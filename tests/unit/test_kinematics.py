@@ -88,6 +88,21 @@ def test_pose_conversions_round_trip():
     np.testing.assert_allclose(back_quat, quat, atol=1e-12)
 
 
+def test_quaternion_to_matrix_normalises_and_matches_scipy(rng):
+    from scipy.spatial.transform import Rotation
+
+    from motion_common.kinematics import matrix_to_quat, quat_to_matrix
+    for _ in range(20):
+        quat = rng.normal(size=4)
+        expected = Rotation.from_quat(quat / np.linalg.norm(quat)).as_matrix()
+        np.testing.assert_allclose(quat_to_matrix(quat), expected, atol=1e-12)        # array, not unit
+        np.testing.assert_allclose(quat_to_matrix(quat.tolist()), expected, atol=1e-12)  # list of floats
+        back = matrix_to_quat(expected)
+        np.testing.assert_allclose(abs(back @ quat) / np.linalg.norm(quat), 1.0, atol=1e-12)
+    with pytest.raises(ValueError, match="no direction"):
+        quat_to_matrix([0.0, 0.0, 0.0, 0.0])
+
+
 def test_bad_model_inputs_are_explained(tmp_path):
     with pytest.raises(RobotModelError, match="does not exist"):
         RobotKinematics(str(tmp_path / "none.urdf"))

@@ -16,6 +16,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from motion_common.float_list import float_list
+
 from .errors import HwInterfaceError
 from .protocol import CommandIndex, Result
 from .robot_hw import RobotDriver
@@ -226,18 +228,18 @@ class CommandDispatcher:
         if not all(map(math.isfinite, q)):
             return Result.NOT_FINITE, f"joints contains NaN or inf: {q}"
         lower, upper = self.driver.joint_limits
-        outside = [i for i, (v, low, high) in enumerate(zip(q, _float_list(lower), _float_list(upper)))
+        outside = [i for i, (v, low, high) in enumerate(zip(q, float_list(lower), float_list(upper)))
                    if v < low or v > high]
         if outside:
             names = [self.driver.joint_names[i] for i in outside]
             return Result.JOINT_LIMIT, f"joints {names} outside their limits"
         if command == CommandIndex.SET_JOINTS:
-            current = _float_list(self.driver.get_robot_joints())
+            current = float_list(self.driver.get_robot_joints())
             with self._stream_lock:
                 fresh = self._clock() - self._stream_time <= STREAM_REFERENCE_TIMEOUT
                 reference = self._stream_reference if fresh and self._stream_reference is not None else None
             against = "the last streamed target" if reference is not None else "the robot"
-            base = current if reference is None else _float_list(reference)
+            base = current if reference is None else float_list(reference)
             step = max(abs(v - b) for v, b in zip(q, base))
             if step > self.max_stream_step:
                 return Result.TOO_FAR, (f"SET_JOINTS target is {step:.3f} rad from {against} (limit "
@@ -325,8 +327,3 @@ class CommandDispatcher:
         except Exception:  # the state is a courtesy; the result code already says it all
             pass
         return answer
-
-
-def _float_list(values) -> list:
-    """``values`` (an array, as the driver template returns, or any sequence) as floats."""
-    return values.tolist() if isinstance(values, np.ndarray) else [float(v) for v in values]

@@ -18,6 +18,9 @@ from .robot_hw import DriverStatus, RobotDriver, SimulatedScene, UrdfModelMixin
 from .stream_follower import StreamFollower
 from .trajectory import JointPath, joint_move_duration, trapezoid_duration
 
+# Fraction of the URDF velocity limits the simulated motors are capped at (see login()).
+MOTOR_SPEED_FRACTION = 0.94
+
 
 def load_scene(client, spec) -> dict:
     """Create the scene's extra bodies; return {name: body id}.
@@ -177,7 +180,11 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                                    Result.LOGIN_FAILED)
         self._joint_indices = [by_name[n] for n in self.joint_names]
         self._efforts = np.array([self._client.getJointInfo(self._body, i)[10] for i in self._joint_indices])
-        self._max_speeds = self.kinematics.velocity_limits.tolist()
+        # pybullet's motor constraint is soft: coupled to gravity and to the other joints'
+        # reactions it ran up to ~6 % past its maxVelocity over a few steps under a fuzzed
+        # stream (1 run in 4 of tests/unit/test_stream_speed.py). The motors are capped that
+        # much below the URDF limit, so the measured speed stays within it.
+        self._max_speeds = (self.kinematics.velocity_limits * MOTOR_SPEED_FRACTION).tolist()
         for index, value in zip(self._joint_indices, self._initial):
             self._client.resetJointState(self._body, index, float(value))
         self._step_cache = {}

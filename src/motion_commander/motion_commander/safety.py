@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motion_common.float_list import float_list
 from motion_common.kinematics import singular_values
 
 from .errors import MotionCommanderError
@@ -73,7 +74,7 @@ class JointStepLimiter:
     def observe_target(self, target, dt: float) -> None:
         """Record this frame's unlimited joint target: its velocity lets a command that
         follows a moving target keep pace instead of braking as if it were to stop there."""
-        target = [float(v) for v in target]
+        target = float_list(target)
         dt = self._clamped_dt(dt)
         previous = self._target
         self._target_velocity = None if previous is None else [(t - p) / dt for t, p in zip(target, previous)]
@@ -114,9 +115,9 @@ class JointStepLimiter:
         """How many times too large the step to ``target`` is for the velocity limit and,
         with an acceleration limit, for stopping at ``goal`` (default: target) (<= 1:
         allowed as is). No side effect."""
-        previous = [float(v) for v in previous]
-        target = [float(v) for v in target]
-        goal = target if goal is None else [float(v) for v in goal]
+        previous = float_list(previous)
+        target = float_list(target)
+        goal = target if goal is None else float_list(goal)
         max_steps = self._max_steps(previous, goal, self._clamped_dt(dt), speed_fraction)
         ratio = 0.0
         for p, t, max_step in zip(previous, target, max_steps):
@@ -137,8 +138,8 @@ class JointStepLimiter:
         passes the frame's full IK target when ``target`` is a partial step toward it.
         ``ratio`` is this same step's ``overshoot()``, when the caller has computed it.
         """
-        previous = [float(v) for v in previous]
-        step = [float(t) - p for t, p in zip(target, previous)]
+        previous = float_list(previous)
+        step = [t - p for t, p in zip(float_list(target), previous)]
         dt = self._clamped_dt(dt)
         if ratio is None:
             ratio = self.overshoot(previous, target, dt, speed_fraction, goal)
@@ -169,7 +170,7 @@ class JointLimitMargin:
     def apply(self, joints):
         """Return (clipped joints, whether any joint was clipped)."""
         # Per frame: plain floats (see JointStepLimiter), one array built at the end.
-        q = [float(v) for v in joints]
+        q = float_list(joints)
         clipped = [min(max(v, low), high) for v, low, high in zip(q, self._lower, self._upper)]
         return np.array(clipped), clipped != q
 
@@ -205,7 +206,8 @@ def condition_number(jacobian) -> float:
     offsets still give translation, so all six rows are used.
     """
     singular = singular_values(np.asarray(jacobian, dtype=float))
-    return float(singular[0] / singular[-1]) if singular[-1] > 1e-12 else float("inf")
+    largest, smallest = float(singular[0]), float(singular[-1])   # Python floats: no numpy scalar maths
+    return largest / smallest if smallest > 1e-12 else float("inf")
 
 
 @dataclass
@@ -229,7 +231,7 @@ class WorkspaceFence:
     def clamp(self, position):
         """Return (position clamped into the fence, whether it was outside)."""
         # Per frame: plain floats (see JointStepLimiter), one array built at the end.
-        p = [float(v) for v in position]
+        p = float_list(position)
         clamped = [min(max(v, low), high) for v, low, high in zip(p, self._floored_lower, self._upper)]
         return np.array(clamped), clamped != p
 

@@ -11,6 +11,7 @@ from typing import Optional
 import numpy as np
 
 from .errors import MotionCommanderError
+from motion_common.float_list import float_list
 from motion_common.kinematics import matrix_to_quat, quat_to_matrix
 
 
@@ -104,7 +105,7 @@ class TeleopMapper:
         # Every frame, on its latency: the position in plain floats (a numpy call on a
         # 3-vector costs ~6 us after the idle between frames, several times the arithmetic;
         # bench/e2e_latency --breakdown, issue 14), one array built at the end.
-        hand = [float(v) for v in hand_position]
+        hand = float_list(hand_position)
         self._last_hand = hand
         displacement = [h - h0 for h, h0 in zip(hand, self._hand_p0)]
         if not self._aligned:

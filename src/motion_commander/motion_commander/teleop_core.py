@@ -12,6 +12,7 @@ from typing import Optional
 import numpy as np
 import pinocchio as pin
 
+from motion_common.float_list import float_list
 from motion_common.kinematics import RobotKinematics, matrix_to_quat
 from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
                      WorkspaceFence, condition_number)
@@ -170,7 +171,7 @@ class TeleopCore:
         # Plain floats for the checks: numpy's per-call overhead on 3- and 4-vectors costs
         # more than the checks, and this runs on every frame's latency.
         try:
-            p, q = [float(v) for v in position], [float(v) for v in orientation]
+            p, q = float_list(position), float_list(orientation)
         except (TypeError, ValueError):
             p, q = [], []
         if not (len(p) == 3 and len(q) == 4 and all(map(math.isfinite, p + q))

@@ -45,8 +45,14 @@ def se3_to_pose(transform: pin.SE3):
 
 def quat_to_matrix(quaternion) -> np.ndarray:
     """3x3 rotation matrix of a quaternion (x, y, z, w); normalised first."""
-    q = np.asarray(quaternion, dtype=float)
-    return pin.Quaternion(q / np.linalg.norm(q)).matrix()
+    # Plain floats into pinocchio's scalar constructor (w, x, y, z): the teleop mapper calls
+    # this on every frame, where numpy's norm and an array conversion cost more than the
+    # arithmetic when the caches are cold between frames (issue 14).
+    x, y, z, w = quaternion.tolist() if isinstance(quaternion, np.ndarray) else quaternion
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    if not norm > 0.0:
+        raise ValueError(f"quaternion {list(quaternion)} has no direction (norm {norm}); pass x, y, z, w of a rotation")
+    return pin.Quaternion(w / norm, x / norm, y / norm, z / norm).matrix()
 
 
 def matrix_to_quat(matrix) -> np.ndarray:

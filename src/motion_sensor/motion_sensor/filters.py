@@ -5,6 +5,7 @@ from collections import deque
 
 import numpy as np
 
+from motion_common.float_list import float_list
 from motion_common.params import Param, ParamSchema
 
 from .errors import MotionSensorError
@@ -30,13 +31,6 @@ def average_quaternions(quats) -> np.ndarray:
         mean = [-m for m in mean]
     norm = math.sqrt(sum(m * m for m in mean))
     return np.array([m / norm for m in mean])
-
-
-def float_list(values) -> list:
-    """``values`` as a list of Python floats: an array through one tolist() call (iterating
-    it yields numpy scalars, several times slower per element; the sequencer does this a few
-    times on every frame's latency)."""
-    return [float(v) for v in (values.tolist() if isinstance(values, np.ndarray) else values)]
 
 
 def _gram(rows) -> list:

@@ -24,9 +24,10 @@ from typing import Dict, Optional
 import numpy as np
 
 from .errors import MotionSensorError
+from motion_common.float_list import float_list
 from motion_common.params import Param, ParamSchema
 
-from .filters import FILTER_PARAMS, FILTERS, float_list, make_filter
+from .filters import FILTER_PARAMS, FILTERS, make_filter
 from .hand_sample import HandSample
 
 # Drops that are the sequencer doing its job, not bad input: counted, never warned about.
