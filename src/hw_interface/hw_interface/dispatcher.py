@@ -86,6 +86,9 @@ class CommandDispatcher:
         self._stream_lock = threading.Lock()  # service threads stream concurrently
         self._stream_reference: Optional[np.ndarray] = None
         self._stream_time = float("-inf")
+        # The driver's joint limits as float lists, read once (every streamed command is
+        # checked against them) and again after each LOGIN, which may load another model.
+        self._limit_lists = None
         self._user = user
         self._password = password
         self._blocking_motion = threading.Lock()
@@ -227,9 +230,10 @@ class CommandDispatcher:
         q = [float(v) for v in joints]
         if not all(map(math.isfinite, q)):
             return Result.NOT_FINITE, f"joints contains NaN or inf: {q}"
-        lower, upper = self.driver.joint_limits
-        outside = [i for i, (v, low, high) in enumerate(zip(q, float_list(lower), float_list(upper)))
-                   if v < low or v > high]
+        if self._limit_lists is None:
+            self._limit_lists = tuple(float_list(limits) for limits in self.driver.joint_limits)
+        lower, upper = self._limit_lists
+        outside = [i for i, (v, low, high) in enumerate(zip(q, lower, upper)) if v < low or v > high]
         if outside:
             names = [self.driver.joint_names[i] for i in outside]
             return Result.JOINT_LIMIT, f"joints {names} outside their limits"
@@ -279,6 +283,7 @@ class CommandDispatcher:
         if command == CommandIndex.GET_ROBOTS:
             return driver.get_robots()
         if command == CommandIndex.LOGIN:
+            self._limit_lists = None
             try:
                 driver.login(url, self._user, self._password)
             except HwInterfaceError:

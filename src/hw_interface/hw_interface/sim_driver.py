@@ -230,12 +230,14 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 self._step_cache[name] = cached
         return cached[1]
 
+    def _read_joint_sample(self):
+        """(stamp of the latest physics step, measured joints) from pybullet; under the lock."""
+        states = self._client.getJointStates(self._body, self._joint_indices)
+        return self._step_stamp, np.array([s[0] for s in states])
+
     def joint_sample(self):
         """(wall-clock time of the physics step the joints come from, measured joints)."""
-        def read():
-            states = self._client.getJointStates(self._body, self._joint_indices)
-            return self._step_stamp, np.array([s[0] for s in states])
-        stamp, joints = self._once_per_step("joints", read)
+        stamp, joints = self._once_per_step("joints", self._read_joint_sample)
         return stamp, joints.copy()
 
     def get_joint_velocities(self) -> np.ndarray:
@@ -467,6 +469,11 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 # with that time (not with when someone reads it) keeps stamp differences
                 # equal to simulated time, also while the loop catches up after a delay.
                 self._step_stamp = (next_tick + self.time_step + to_wall) if self.real_time else time.time()
+                # The joints of every step are read here, as a controller's state stream
+                # would deliver them: a streamed command's checks (the server, ~110 Hz) and
+                # /joint_states (100 Hz) then read them without the lock or pybullet, instead
+                # of waiting behind the step in progress (issue 14).
+                self._step_cache["joints"] = (self.steps, self._read_joint_sample())
             if not self.real_time:
                 # Yield the GIL and the lock so callers are not starved by a flat-out loop.
                 time.sleep(0)
