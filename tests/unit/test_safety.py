@@ -250,6 +250,36 @@ def test_carried_and_prepared_command_figures_give_the_same_commands_as_recomput
     np.testing.assert_allclose(prepared_run, recomputed_run, rtol=0, atol=1e-9)
 
 
+def test_condition_bound_never_claims_below_when_it_is_not():
+    # Weyl's bound from a nearby reference: whenever it says "below", the exact condition
+    # number is below; along a path into the wrist singularity it must stop saying so.
+    from motion_commander.safety import condition_certainly_below, extreme_singular_values
+    core = make_core()
+    kin, rng = core.kinematics, np.random.default_rng(5)
+    decided = undecided = 0
+    for _ in range(300):
+        reference_q = HOME + rng.uniform(-1.0, 1.0, 6)
+        q = reference_q + rng.normal(0.0, 0.01, 6)
+        reference = kin.local_jacobian(reference_q)
+        below = condition_certainly_below(kin.local_jacobian(q), reference, extreme_singular_values(reference), 40.0)
+        exact = condition_number(kin.jacobian(q))
+        if below:
+            decided += 1
+            assert exact < 40.0
+        else:
+            undecided += 1
+    assert decided > 150 and undecided > 0, (decided, undecided)
+    # The wrist straightening (q5 -> 0): the condition number grows without bound.
+    q = HOME.copy()
+    for wrist in np.linspace(-0.5, -1e-4, 60):
+        previous = q.copy()
+        q[4] = wrist
+        reference = kin.local_jacobian(previous)
+        if condition_certainly_below(kin.local_jacobian(q), reference, extreme_singular_values(reference), 40.0):
+            assert condition_number(kin.jacobian(q)) < 40.0
+    assert not condition_certainly_below(kin.local_jacobian(q), reference, extreme_singular_values(reference), 40.0)
+
+
 def test_ik_seeded_with_the_last_goal_stays_on_the_commanded_branch():
     # A fast hand with the joints speed-limited: the command lags the IK goal. Seeding each
     # IK with the previous goal must give the solution of the same branch as seeding with

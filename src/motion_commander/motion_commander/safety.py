@@ -205,9 +205,32 @@ def condition_number(jacobian) -> float:
     The translational rows alone miss wrist and elbow singularities of arms whose wrist
     offsets still give translation, so all six rows are used.
     """
-    singular = singular_values(np.asarray(jacobian, dtype=float))
-    largest, smallest = float(singular[0]), float(singular[-1])   # Python floats: no numpy scalar maths
+    largest, smallest = extreme_singular_values(jacobian)
     return largest / smallest if smallest > 1e-12 else float("inf")
+
+
+def extreme_singular_values(jacobian) -> tuple:
+    """(largest, smallest) singular value of a Jacobian, as Python floats (no numpy scalar
+    arithmetic after it)."""
+    singular = singular_values(np.asarray(jacobian, dtype=float))
+    return float(singular[0]), float(singular[-1])
+
+
+def condition_certainly_below(jacobian, reference, reference_extremes, threshold: float) -> bool:
+    """True when the condition number of ``jacobian`` is certainly below ``threshold``,
+    known from a ``reference`` Jacobian nearby whose (largest, smallest) singular values are
+    ``reference_extremes``, without a singular value decomposition of ``jacobian``.
+
+    Weyl's inequality bounds how far each singular value moves: |s_i(J) - s_i(R)| <=
+    ||J - R||_2 <= ||J - R||_F. A teleop frame's IK solution lies close to the previous
+    one, so the bound is tight and usually settles the question (issue 14: the SVD is the
+    largest single item of the core's per-frame work). False means: compute it.
+    """
+    difference = np.asarray(jacobian, dtype=float) - reference
+    distance = math.sqrt(float(np.vdot(difference, difference)))
+    largest, smallest = reference_extremes
+    lowest = smallest - distance
+    return lowest > 0.0 and (largest + distance) < threshold * lowest
 
 
 @dataclass

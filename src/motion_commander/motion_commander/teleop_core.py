@@ -15,7 +15,7 @@ import pinocchio as pin
 from motion_common.float_list import float_list
 from motion_common.kinematics import RobotKinematics, matrix_to_quat
 from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
-                     WorkspaceFence, condition_number)
+                     WorkspaceFence, condition_certainly_below, condition_number, extreme_singular_values)
 from .teleop import AutoClutch, TeleopMapper
 
 
@@ -114,8 +114,10 @@ class TeleopCore:
         # The previous frame's IK solution (the unlimited goal): the next IK starts there.
         self._last_goal: Optional[np.ndarray] = None
         # That IK's first step at its seed (pose, Jacobian), done by prepare_next() ahead of
-        # the frame; None: not done yet, the frame does it.
+        # the frame, and the largest and smallest singular values of that Jacobian; None:
+        # not done yet, the frame does without.
         self._prepared_seed = None
+        self._seed_extremes = None
         self._command_stamp: Optional[float] = None
         self._halted = False
 
@@ -202,6 +204,7 @@ class TeleopCore:
         self._command_pose = None
         self._last_goal = None
         self._prepared_seed = None
+        self._seed_extremes = None
         self._command_stamp = stamp
         self._halted = False
         self.limiter.reset()
@@ -219,6 +222,7 @@ class TeleopCore:
         self._pose_at_command()
         if self._prepared_seed is None:
             self._prepared_seed = self.kinematics.prepare_seed(self._ik_seed())
+            self._seed_extremes = extreme_singular_values(self._prepared_seed.local_jacobian)
 
     def _ik_seed(self) -> np.ndarray:
         # The previous frame's IK solution: the hand moved little since, so one iteration
@@ -266,14 +270,23 @@ class TeleopCore:
             return None
         joints, clipped = self.margin.apply(result.joints)
         self._last_goal = joints
-        self._prepared_seed = None
+        seed, seed_extremes = self._prepared_seed, self._seed_extremes
+        self._prepared_seed = self._seed_extremes = None
         if clipped:
             flags.append(TeleopStatus.JOINT_LIMIT_MARGIN)
         fraction = self.ramp.fraction(stamp)
         if fraction < 1.0:
             flags.append(TeleopStatus.RAMPING)
-        target_condition = condition_number(self.kinematics.jacobian(joints))
-        singular = self.singularity.speed_fraction(self._condition_at_command(), target_condition)
+        # The singularity guard slows motion only toward a condition number of at least its
+        # slowdown threshold: when the IK solution's is certainly below it (bounded from the
+        # seed's, a frame away), full speed is allowed without computing it exactly.
+        if seed_extremes is not None and condition_certainly_below(
+                self.kinematics.local_jacobian(joints), seed.local_jacobian, seed_extremes,
+                self.singularity.slowdown):
+            target_condition, singular = None, 1.0
+        else:
+            target_condition = condition_number(self.kinematics.jacobian(joints))
+            singular = self.singularity.speed_fraction(self._condition_at_command(), target_condition)
         if singular < 1.0:
             flags.append(TeleopStatus.SINGULARITY_HALT if singular == 0.0 else TeleopStatus.SINGULARITY_SLOWDOWN)
         speed = min(fraction, singular)

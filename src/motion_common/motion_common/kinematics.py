@@ -155,6 +155,12 @@ class RobotKinematics:
         q = np.asarray(joints, dtype=float)
         return pin.computeFrameJacobian(self.model, self.data, q, self.tool_id, pin.LOCAL_WORLD_ALIGNED)
 
+    def local_jacobian(self, joints) -> np.ndarray:
+        """6 x dof tool Jacobian in the tool's LOCAL frame (linear rows first): the same
+        singular values as jacobian(), the frame the IK works in."""
+        q = np.asarray(joints, dtype=float)
+        return pin.computeFrameJacobian(self.model, self.data, q, self.tool_id, pin.LOCAL)
+
     def within_limits(self, joints, margin: float = 0.0) -> bool:
         """True when every joint lies inside its limits shrunk by ``margin``."""
         q = np.asarray(joints, dtype=float)
