@@ -165,26 +165,43 @@ def serialisation_costs(rounds=2000):
     return costs
 
 
-def idle_wake_penalty(gap=0.009):
-    """The core's per-frame cost (TeleopCore on a real recording) in a hot loop and with
-    ``gap`` s of idle before each frame, as in a 110 Hz stream: p50/p99 in us."""
+def idle_wake_penalty(gap=0.009, lead=0.0015):
+    """The core's per-frame cost (TeleopCore on a real recording): in a hot loop, and with
+    ``gap`` s of idle before each frame as in a 110 Hz stream, its between-frames work
+    (prepare_next) done either right after the command or ``lead`` s before the next frame
+    (the node's default, teleop.yaml prepare_lead_s). The three run interleaved, frame by
+    frame, so the machine's drift touches them alike: p50/p99 in us."""
     from transport_floor import _core, recorded_hands
     path = recorded_hands()
-    figures = {}
-    for label, pause in (("hot loop", 0.0), (f"after {gap * 1000:.0f} ms idle", gap)):
-        core, costs, stamp = _core(), [], 1000.0
-        for position, orientation in path:
-            stamp += 1.0 / 110.0
-            if pause:
-                time.sleep(pause)
+    variants = {"hot loop": None, f"after {gap * 1000:.0f} ms idle, prepared right after the command": 0.0,
+                f"after {gap * 1000:.0f} ms idle, prepared {lead * 1000:g} ms before the frame": lead}
+    cores = {label: _core() for label in variants}
+    costs = {label: [] for label in variants}
+    stamp = 1000.0
+    for position, orientation in path:
+        stamp += 1.0 / 110.0
+        for label, prepare_lead in variants.items():
+            core = cores[label]
+            if prepare_lead is None:
+                core.prepare_next()
+            elif prepare_lead:
+                time.sleep(gap - prepare_lead)
+                core.prepare_next()
+                time.sleep(prepare_lead)
+            else:
+                time.sleep(gap)
             start = time.perf_counter()
             command = core.on_hand_pose(stamp, position, orientation)
             if command is not None:
-                costs.append(time.perf_counter() - start)
+                costs[label].append(time.perf_counter() - start)
                 core.on_joint_state(command.joints)
-        us = np.asarray(costs) * 1e6
+                if prepare_lead == 0.0:
+                    core.prepare_next()
+    figures = {}
+    for label, values in costs.items():
+        us = np.asarray(values) * 1e6
         figures[label] = {"p50_us": round(float(np.percentile(us, 50)), 1),
-                          "p99_us": round(float(np.percentile(us, 99)), 1), "n": len(costs)}
+                          "p99_us": round(float(np.percentile(us, 99)), 1), "n": len(values)}
     return figures
 
 

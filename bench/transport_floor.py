@@ -151,6 +151,8 @@ def role_caller(out, count, variant):
             core.on_joint_state(joints)
         send(msg.header.stamp, joints)
         sent.append(1)
+        if core is not None:
+            core.prepare_next()  # the between-frames work, after the command (the node times it later)
     subscriber = rospy.Subscriber("/floor/pose", PoseStamped, on_pose, queue_size=10, tcp_nodelay=True)
     # The source starts only once this end of the chain is connected: a caller slow to
     # start (the core's imports) must not miss the first poses.
