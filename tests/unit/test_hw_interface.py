@@ -56,6 +56,21 @@ def wait_sim(sim, seconds):
         time.sleep(0.0005)
 
 
+def test_after_disconnect_the_last_step_is_not_served_as_the_robot_state():
+    # The step loop caches each step's joints; once the simulation is gone, a read must say
+    # NOT_CONNECTED instead of returning the last step's joints.
+    driver = PybulletSimDriver(UR5E, initial_joints=HOME, real_time=False)
+    driver.login("sim://")
+    deadline = time.monotonic() + 30.0
+    while driver.steps < 3 and time.monotonic() < deadline:
+        time.sleep(0.001)
+    np.testing.assert_allclose(driver.get_robot_joints(), HOME, atol=0.05)
+    driver.disconnect()
+    with pytest.raises(HwInterfaceError) as refused:
+        driver.get_robot_joints()
+    assert refused.value.result == Result.NOT_CONNECTED
+
+
 def test_commands_before_login_say_not_connected():
     driver = PybulletSimDriver(UR5E, initial_joints=HOME, real_time=False)
     answer = CommandDispatcher(driver).handle(CommandIndex.GET_ROBOT_JOINTS)

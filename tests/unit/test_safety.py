@@ -280,6 +280,41 @@ def test_condition_bound_never_claims_below_when_it_is_not():
     assert not condition_certainly_below(kin.local_jacobian(q), reference, extreme_singular_values(reference), 40.0)
 
 
+def test_the_bound_gives_the_guards_own_decisions_where_it_acts():
+    # With a slowdown threshold the paddle recording crosses (its condition numbers are 7.7-9.1),
+    # the core with its between-frames work (where the bound replaces the SVD) must slow
+    # down exactly where the core without it does: same statuses, same commands.
+    import os
+
+    from conftest import DATA
+    from motion_sensor.leap_v6 import frame_to_sample, read_recording
+    from motion_sensor.sequencer import Sequencer
+    frames = read_recording(os.path.join(DATA, "test-paddle-rightwards.jsonl.gz")).frames
+    runs = []
+    for prepare in (False, True):
+        core = make_core(joint_speed_scale=1.0, joint_acceleration=200.0, singularity_slowdown=8.5,
+                         singularity_halt=12.0)
+        sequencer, commands, statuses = Sequencer(), [], []
+        for frame in frames:
+            sample = frame_to_sample(frame, frame.timestamp)
+            pose = None if sample is None else sequencer.process(sample, now=frame.timestamp)
+            if pose is None:
+                continue
+            command = core.on_hand_pose(pose.stamp, pose.position, pose.orientation)
+            if command is not None:
+                commands.append(command.joints)
+                statuses.append(command.status)
+                core.on_joint_state(command.joints)
+                if prepare:
+                    core.prepare_next()
+        runs.append((np.array(commands), statuses))
+    (plain, plain_statuses), (prepared, prepared_statuses) = runs
+    slowed = sum(s in (TeleopStatus.SINGULARITY_SLOWDOWN, TeleopStatus.SINGULARITY_HALT) for s in plain_statuses)
+    assert 20 < slowed < len(plain_statuses) - 20, f"{slowed} of {len(plain_statuses)}: pick another threshold"
+    assert prepared_statuses == plain_statuses
+    np.testing.assert_allclose(prepared, plain, rtol=0, atol=1e-9)
+
+
 def test_ik_seeded_with_the_last_goal_stays_on_the_commanded_branch():
     # A fast hand with the joints speed-limited: the command lags the IK goal. Seeding each
     # IK with the previous goal must give the solution of the same branch as seeding with

@@ -283,13 +283,14 @@ class CommandDispatcher:
         if command == CommandIndex.GET_ROBOTS:
             return driver.get_robots()
         if command == CommandIndex.LOGIN:
-            self._limit_lists = None
             try:
                 driver.login(url, self._user, self._password)
             except HwInterfaceError:
                 raise
             except Exception as exc:
                 raise HwInterfaceError(f"login to {url!r} failed: {exc}", Result.LOGIN_FAILED) from None
+            finally:
+                self._limit_lists = None  # after the login: it may have loaded another model
         elif command == CommandIndex.GET_ROBOT_JOINTS:
             driver.get_robot_joints()  # raises NOT_CONNECTED when there is no controller
         elif command == CommandIndex.GET_ROBOT_CARTESIAN_POSITION:

@@ -18,7 +18,8 @@ from .robot_hw import DriverStatus, RobotDriver, SimulatedScene, UrdfModelMixin
 from .stream_follower import StreamFollower
 from .trajectory import JointPath, joint_move_duration, trapezoid_duration
 
-# Fraction of the URDF velocity limits the simulated motors are capped at (see login()).
+# Fraction of the URDF velocity limits the simulated motors are capped at (see login()): the
+# simulated arm's top joint speed. MoveJ/MoveL plan at speed_scale (0.5) of the limits, below it.
 MOTOR_SPEED_FRACTION = 0.94
 
 
@@ -204,6 +205,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             if self._client is not None:
                 self._client.disconnect()
                 self._client = None
+            # The step loop left its last readings here: without a simulation they must not
+            # be served as the robot's state (reads then say NOT_CONNECTED).
+            self._step_cache = {}
 
     # -- template: state -------------------------------------------------------------------
     def _require_connection(self):
