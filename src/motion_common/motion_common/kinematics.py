@@ -166,11 +166,15 @@ class RobotKinematics:
         q = np.asarray(joints, dtype=float)
         return bool(np.all(q >= self.lower + margin) and np.all(q <= self.upper - margin))
 
+    def _within_limits(self, joints) -> np.ndarray:
+        """``joints`` as an array clipped to the joint limits (an IK's start)."""
+        return np.minimum(np.maximum(np.asarray(joints, dtype=float), self.lower), self.upper)
+
     def prepare_seed(self, seed) -> PreparedSeed:
         """The first step of solve_ik() at ``seed`` (clip, tool pose, LOCAL Jacobian), to be
         passed to solve_ik(..., prepared=) later: the solve then gives exactly the result it
         would give from ``seed``, with that work done beforehand."""
-        q = np.minimum(np.maximum(np.asarray(seed, dtype=float), self.lower), self.upper)
+        q = self._within_limits(seed)
         jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.tool_id, pin.LOCAL)
         return PreparedSeed(q, self.forward(q), jacobian)
 
@@ -190,7 +194,7 @@ class RobotKinematics:
         if prepared is not None:
             q, tool_pose, prepared_jacobian = prepared.joints, prepared.tool_pose, prepared.local_jacobian
         else:
-            q = np.minimum(np.maximum(np.asarray(seed, dtype=float), lower), upper)
+            q = self._within_limits(seed)
         damping_eye = self._damping_eyes.get(damping)
         if damping_eye is None:
             damping_eye = self._damping_eyes[damping] = damping * np.eye(6)
