@@ -166,7 +166,7 @@ class RobotKinematics:
         q = np.asarray(joints, dtype=float)
         return bool(np.all(q >= self.lower + margin) and np.all(q <= self.upper - margin))
 
-    def _within_limits(self, joints) -> np.ndarray:
+    def _clipped_to_limits(self, joints) -> np.ndarray:
         """``joints`` as an array clipped to the joint limits (an IK's start)."""
         return np.minimum(np.maximum(np.asarray(joints, dtype=float), self.lower), self.upper)
 
@@ -174,9 +174,8 @@ class RobotKinematics:
         """The first step of solve_ik() at ``seed`` (clip, tool pose, LOCAL Jacobian), to be
         passed to solve_ik(..., prepared=) later: the solve then gives exactly the result it
         would give from ``seed``, with that work done beforehand."""
-        q = self._within_limits(seed)
-        jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.tool_id, pin.LOCAL)
-        return PreparedSeed(q, self.forward(q), jacobian)
+        q = self._clipped_to_limits(seed)
+        return PreparedSeed(q, self.forward(q), self.local_jacobian(q))
 
     def solve_ik(self, target: pin.SE3, seed, max_iterations: int = 50, position_tolerance: float = 1e-4,
                  rotation_tolerance: float = 1e-3, damping: float = 1e-4,
@@ -194,7 +193,7 @@ class RobotKinematics:
         if prepared is not None:
             q, tool_pose, prepared_jacobian = prepared.joints, prepared.tool_pose, prepared.local_jacobian
         else:
-            q = self._within_limits(seed)
+            q = self._clipped_to_limits(seed)
         damping_eye = self._damping_eyes.get(damping)
         if damping_eye is None:
             damping_eye = self._damping_eyes[damping] = damping * np.eye(6)
