@@ -55,7 +55,7 @@ def test_raw11_conversion_round_trips_within_quantisation():
 
 
 def test_python_needs_the_stub_under_fakenect(tmp_path):
-    """OpenKinect/libfreenect#509: without the stub, libfreenect_sync cannot load."""
+    """fakenect lacks camera_to_world (OpenKinect/libfreenect#509): without the stub, libfreenect_sync cannot load."""
     code = ("import ctypes, os\n"
             "ctypes.CDLL(os.environ['FAKE_LIB'], mode=os.RTLD_GLOBAL | os.RTLD_NOW)\n"
             "ctypes.CDLL('libfreenect_sync.so.0.5')\n")

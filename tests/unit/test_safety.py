@@ -187,7 +187,7 @@ def test_shipped_teleop_yaml_validates():
 
 
 def test_limiter_brakes_in_time_to_stop_at_a_reversing_target():
-    # Issue 14: a command catching up at speed used to run past the point where the hand
+    # Regression: a command catching up at speed used to run past the point where the hand
     # turned back (acceleration-limited braking that never planned its stop distance).
     limiter = JointStepLimiter([3.0], scale=1.0, acceleration_limit=80.0)
     dt, command, commands = 0.009, 0.0, []

@@ -1,4 +1,4 @@
-"""Issue 14, item 3: overshoot at reversals and tracking against the raw hand, on
+"""The session report's overshoot at reversals and tracking against the raw hand, on
 synthetic paths whose answers are known by construction."""
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Issue 14, item 4: joint speeds seen on /joint_states stay within the URDF limits.
+"""Joint speeds seen on /joint_states stay within the URDF limits.
 
 The speed a user computes from consecutive /joint_states (position difference over stamp
 difference) must never exceed the URDF velocity limits, whatever the stream of SetJoints

@@ -226,7 +226,7 @@ class CommandDispatcher:
             return Result.WRONG_LENGTH, f"joints needs {dof} values for this robot, got {len(joints)}"
         # Every streamed command passes here, on its latency: plain floats, since a numpy
         # call on a 6-vector costs several times this arithmetic when the caches are cold
-        # between two commands (bench/e2e_latency, issue 14).
+        # between two commands (bench/e2e_latency).
         q = [float(v) for v in joints]
         if not all(map(math.isfinite, q)):
             return Result.NOT_FINITE, f"joints contains NaN or inf: {q}"

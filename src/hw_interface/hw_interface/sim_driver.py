@@ -476,7 +476,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 # The joints of every step are read here, as a controller's state stream
                 # would deliver them: a streamed command's checks (the server, ~110 Hz) and
                 # /joint_states (100 Hz) then read them without the lock or pybullet, instead
-                # of waiting behind the step in progress (issue 14).
+                # of waiting behind the step in progress.
                 self._step_cache["joints"] = (self.steps, self._read_joint_sample())
             if not self.real_time:
                 # Yield the GIL and the lock so callers are not starved by a flat-out loop.

@@ -6,7 +6,7 @@ Done right after a command, that work is ~9 ms old when the next frame of a 110 
 arrives, and on a machine whose caches and clocks have gone cold meanwhile the frame pays
 again for bringing the interpreter, numpy, pinocchio and LAPACK back in. Done ``lead_s``
 before the frame is due, the same work leaves them warm for it (bench/e2e_latency
---breakdown: the core's per-frame cost after a 110 Hz gap, both ways; issue 14).
+--breakdown: the core's per-frame cost after a 110 Hz gap, both ways).
 
 The next arrival is predicted from the median of recent inter-arrival intervals, so a
 device's own rate (Leap 110 Hz, SpaceMouse, a camera) is learnt, and one late or early

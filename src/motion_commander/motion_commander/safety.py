@@ -69,7 +69,7 @@ class JointStepLimiter:
     # The methods below run on every teleop frame, on its latency. They work on plain
     # float lists: a numpy call on a 6-vector costs ~1 us in a hot loop but ~6 us after the
     # ~9 ms of idle between frames (cold caches), ~4x a plain-Python loop doing the same
-    # (bench/e2e_latency --breakdown, issue 14).
+    # (bench/e2e_latency --breakdown).
 
     def observe_target(self, target, dt: float) -> None:
         """Record this frame's unlimited joint target: its velocity lets a command that
@@ -223,7 +223,7 @@ def condition_certainly_below(jacobian, reference, reference_extremes, threshold
 
     Weyl's inequality bounds how far each singular value moves: |s_i(J) - s_i(R)| <=
     ||J - R||_2 <= ||J - R||_F. A teleop frame's IK solution lies close to the previous
-    one, so the bound is tight and usually settles the question (issue 14: the SVD is the
+    one, so the bound is tight and usually settles the question (the SVD is the
     largest single item of the core's per-frame work). False means: compute it.
     """
     difference = np.asarray(jacobian, dtype=float) - reference

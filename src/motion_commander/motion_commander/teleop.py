@@ -104,7 +104,7 @@ class TeleopMapper:
             raise MotionCommanderError("teleop is not engaged; call engage() first")
         # Every frame, on its latency: the position in plain floats (a numpy call on a
         # 3-vector costs ~6 us after the idle between frames, several times the arithmetic;
-        # bench/e2e_latency --breakdown, issue 14), one array built at the end.
+        # bench/e2e_latency --breakdown), one array built at the end.
         hand = float_list(hand_position)
         self._last_hand = hand
         displacement = [h - h0 for h, h0 in zip(hand, self._hand_p0)]

@@ -2,7 +2,7 @@
 
 On the teleop chain's per-frame path (sequencer, core, dispatcher) numpy's per-call cost
 on such small vectors exceeds the arithmetic when the caches are cold between two frames,
-so that arithmetic runs on plain floats (bench/e2e_latency, issue 14). Converting an array
+so that arithmetic runs on plain floats (bench/e2e_latency). Converting an array
 is one tolist() call: iterating it instead yields numpy scalars, several times slower per
 element.
 """

@@ -17,7 +17,7 @@ def solve_positive_definite(matrix: np.ndarray, vector: np.ndarray) -> np.ndarra
 
     LAPACK's dposv through scipy's thin wrapper: on the per-frame path, after the idle
     between frames, np.linalg.solve's Python-level checks cost more than the 6x6 solve
-    (~180 against ~90 us with cold caches; issue 14). LU (np.linalg.solve) is the fallback
+    (~180 against ~90 us with cold caches). LU (np.linalg.solve) is the fallback
     when the matrix is not positive definite to working precision.
     """
     _, solution, info = lapack.dposv(matrix, vector)
@@ -47,7 +47,7 @@ def quat_to_matrix(quaternion) -> np.ndarray:
     """3x3 rotation matrix of a quaternion (x, y, z, w); normalised first."""
     # Plain floats into pinocchio's scalar constructor (w, x, y, z): the teleop mapper calls
     # this on every frame, where numpy's norm and an array conversion cost more than the
-    # arithmetic when the caches are cold between frames (issue 14).
+    # arithmetic when the caches are cold between frames.
     x, y, z, w = quaternion.tolist() if isinstance(quaternion, np.ndarray) else quaternion
     norm = math.sqrt(x * x + y * y + z * z + w * w)
     if not norm > 0.0:

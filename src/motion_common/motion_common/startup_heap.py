@@ -12,7 +12,7 @@ def freeze_startup_heap() -> None:
     in the core's process, and each lands on whichever frame happens to allocate at that
     moment: a few frames in a hundred. What a node allocates per frame is freed by
     reference counting, so after the freeze the collections scan almost nothing
-    (bench/e2e_latency, issue 14).
+    (bench/e2e_latency).
     """
     gc.collect()
     gc.freeze()

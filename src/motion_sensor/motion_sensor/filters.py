@@ -38,7 +38,7 @@ def _gram(rows) -> list:
 
     Plain floats, one pass: on the sequencer's per-frame path (10 rows), numpy's array
     construction and product cost more than the 100 multiply-adds when the caches are cold
-    between frames (issue 14)."""
+    between frames (bench/e2e_latency)."""
     xx = xy = xz = xw = yy = yz = yw = zz = zw = ww = 0.0
     for x, y, z, w in rows:
         xx += x * x

@@ -38,7 +38,7 @@ _LOADED = {}
 
 
 def load_sync_library(fake: bool, stub_dir: str = "") -> ctypes.CDLL:
-    """libfreenect_sync bound to the real libfreenect, or to fakenect's (with the #509 stub)."""
+    """libfreenect_sync bound to the real libfreenect, or to fakenect's (plus a stub for its missing camera_to_world)."""
     kind = "fakenect" if fake else "device"
     if _LOADED and kind not in _LOADED:
         raise MotionSensorError(f"libfreenect already loaded for the {next(iter(_LOADED))} in this process; "
@@ -73,7 +73,7 @@ class KinectDevice(DepthHandDevice):
         Param("intrinsics_px", [594.21, 591.04, 339.31, 242.74], unit="px", length=4,
               doc="depth camera fx, fy, cx, cy (typical Kinect v1 values; calibrate yours)"),
         Param("fakenect_dump", "", doc="play this fakenect dump directory instead of the device"),
-        Param("fakenect_stub_dir", "", doc="where the fakenect #509 stub is built (empty: ~/.cache/motion_sensor)"),
+        Param("fakenect_stub_dir", "", doc="where the fakenect camera_to_world stub is built (empty: ~/.cache/motion_sensor)"),
     ], ignore=("image_topic", "camera_info_topic", "wait_s")))
 
     def __init__(self, config: dict, **kw):
