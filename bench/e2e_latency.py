@@ -67,7 +67,7 @@ def run_session(recording, repeat=1):
     """Run one teleop session on ``recording`` (``repeat`` passes); return its summary dict."""
     out = tempfile.mkdtemp(prefix="e2e-")
     env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}")
-    cmd = ["roslaunch", "-p", str(PORT), os.path.join(ROOT, "launch", "teleop_sim.launch"),
+    cmd = ["roslaunch", "-p", str(PORT), os.path.join(ROOT, "src", "motion_bringup", "launch", "teleop_sim.launch"),
            f"recording:={recording_path(recording)}", f"output_dir:={out}", f"repeat:={repeat}"]
     subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=600, check=False)
     path = os.path.join(out, "session_summary.json")

@@ -51,7 +51,7 @@ def service_benchmarks(calls, stream_seconds):
     """Round trip and 500 Hz streaming through a hw_sim.launch started here."""
     env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}")
     os.environ["ROS_MASTER_URI"] = env["ROS_MASTER_URI"]
-    launch = subprocess.Popen(["roslaunch", "-p", str(PORT), os.path.join(ROOT, "launch", "hw_sim.launch")],
+    launch = subprocess.Popen(["roslaunch", "-p", str(PORT), os.path.join(ROOT, "src", "motion_bringup", "launch", "hw_sim.launch")],
                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         import rospy

@@ -23,7 +23,7 @@ import time
 
 from bench_common import RESULTS, ROOT, write_results
 
-LAUNCH = os.path.join(ROOT, "launch", "kitting_sim.launch")
+LAUNCH = os.path.join(ROOT, "src", "motion_bringup", "launch", "kitting_sim.launch")
 RUN_SESSION = os.path.join(ROOT, "scripts", "run_session")
 
 

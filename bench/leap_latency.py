@@ -62,7 +62,7 @@ def main():
             subs = [rospy.Subscriber("/motion_sensor/raw_hand", hand, on_raw, queue_size=1000, tcp_nodelay=True),
                     rospy.Subscriber("/motion_sensor/hand", hand, on_filtered, queue_size=1000, tcp_nodelay=True)]
             server.start()
-            launch = subprocess.Popen(["roslaunch", os.path.join(ROOT, "launch", "sensing.launch"),
+            launch = subprocess.Popen(["roslaunch", os.path.join(ROOT, "src", "motion_bringup", "launch", "sensing.launch"),
                                        f"leap_port:={PORT}"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
             print(f"replaying {name} ({len(server.frames)} frames)...", flush=True)
             server.done.wait(60)

@@ -160,12 +160,12 @@ def start_session(pair, recording, watchers=(), robot_args=(), sensor_args=()):
     the link, the ``watchers`` ((name, argv) pairs) on the robot side, then sensing.launch
     device:=replay on the sensor side. Returns the watchers' processes; raises if the master
     never answers."""
-    pair.spawn("robot", "robot_pc", ["roslaunch", "-p", str(pair.port), os.path.join(ROOT, "launch", "robot_pc.launch"),
+    pair.spawn("robot", "robot_pc", ["roslaunch", "-p", str(pair.port), os.path.join(ROOT, "src", "motion_bringup", "launch", "robot_pc.launch"),
                                      *robot_args])
     if not pair.wait_for_master(90.0):
         raise RuntimeError("the master on the robot side never answered over the link:\n" + pair.log_tail("robot_pc"))
     procs = [pair.spawn("robot", name, argv) for name, argv in watchers]
-    pair.spawn("sensor", "sensing", ["roslaunch", os.path.join(ROOT, "launch", "sensing.launch"), "device:=replay",
+    pair.spawn("sensor", "sensing", ["roslaunch", os.path.join(ROOT, "src", "motion_bringup", "launch", "sensing.launch"), "device:=replay",
                                      f"recording:={recording}", *sensor_args])
     return procs
 

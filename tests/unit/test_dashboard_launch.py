@@ -12,7 +12,7 @@ ARGS = {"dashboard": "false", "dashboard_port": "8080", "dashboard_host": "127.0
 
 
 def parse(name):
-    return ET.parse(os.path.join(ROOT, "launch", name)).getroot()
+    return ET.parse(os.path.join(ROOT, "src", "motion_bringup", "launch", name)).getroot()
 
 
 @pytest.mark.parametrize("name", SESSIONS)

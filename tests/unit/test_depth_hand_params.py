@@ -39,7 +39,7 @@ def test_launch_params_are_declared():
     schemas = {"depth_hand_driver": node_schema(DepthTopicDevice), "kinect_driver": node_schema(KinectDevice)}
     seen = set()
     for name in ("sensing.launch", "teleop_sim.launch"):
-        root = ElementTree.parse(os.path.join(ROOT, "launch", name)).getroot()
+        root = ElementTree.parse(os.path.join(ROOT, "src", "motion_bringup", "launch", name)).getroot()
         for node in root.iter("node"):
             if node.get("type") in schemas:
                 seen.add((name, node.get("type")))

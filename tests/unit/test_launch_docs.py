@@ -9,11 +9,11 @@ import pytest
 import yaml
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-LAUNCH_FILES = sorted(glob.glob(os.path.join(ROOT, "launch", "*.launch")))
+LAUNCH_FILES = sorted(glob.glob(os.path.join(ROOT, "src", "motion_bringup", "launch", "*.launch")))
 
 
 def test_there_are_launch_files():
-    assert LAUNCH_FILES, f"no launch files found in {ROOT}/launch"
+    assert LAUNCH_FILES, f"no launch files found in {ROOT}/src/motion_bringup/launch"
 
 
 @pytest.mark.parametrize("path", LAUNCH_FILES, ids=os.path.basename)
@@ -28,7 +28,7 @@ def test_every_arg_has_a_doc(path):
 
 
 def _launch_args(name):
-    root = ET.parse(os.path.join(ROOT, "launch", name)).getroot()
+    root = ET.parse(os.path.join(ROOT, "src", "motion_bringup", "launch", name)).getroot()
     return {arg.get("name"): arg.get("default") for arg in root.findall("arg")}
 
 
@@ -37,6 +37,6 @@ def test_kitting_ur_gripper_output_is_the_cells_magnet():
         cell = yaml.safe_load(stream)
     args = _launch_args("kitting_ur.launch")
     assert int(args["gripper_output"]) == cell["gripper"]["output"]
-    root = ET.parse(os.path.join(ROOT, "launch", "kitting_ur.launch")).getroot()
+    root = ET.parse(os.path.join(ROOT, "src", "motion_bringup", "launch", "kitting_ur.launch")).getroot()
     params = {p.get("name"): p.get("value") for p in root.findall("param")}
     assert params["motion_controller_server/driver_params/gripper_output"] == "$(arg gripper_output)"

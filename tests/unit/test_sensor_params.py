@@ -105,7 +105,7 @@ LAUNCH_NODES = {"sequencer": lambda: SEQUENCER_PARAMS, "spacemouse_driver": lamb
 
 def test_every_param_launch_files_and_rostests_set_is_declared():
     from xml.etree import ElementTree
-    files = [os.path.join(ROOT, "launch", f) for f in os.listdir(os.path.join(ROOT, "launch")) if f.endswith(".launch")]
+    files = [os.path.join(ROOT, "src", "motion_bringup", "launch", f) for f in os.listdir(os.path.join(ROOT, "src", "motion_bringup", "launch")) if f.endswith(".launch")]
     files += [os.path.join(ROOT, "tests", "rostest", f) for f in os.listdir(os.path.join(ROOT, "tests", "rostest"))]
     seen = 0
     for path in files:

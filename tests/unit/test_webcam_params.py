@@ -36,7 +36,7 @@ def test_launch_files_set_only_declared_parameters():
     schema = node_schema(WebcamHandDevice)
     seen = 0
     for name in ("sensing.launch", "teleop_sim.launch"):
-        root = ElementTree.parse(os.path.join(ROOT, "launch", name)).getroot()
+        root = ElementTree.parse(os.path.join(ROOT, "src", "motion_bringup", "launch", name)).getroot()
         nodes = [n for n in root.iter("node") if n.get("type") == "webcam_hand_driver"]
         assert nodes, name
         for param in nodes[0].findall("param"):
