@@ -1,5 +1,64 @@
-"""The operator's dashboard: a web page for operation and settings (the paper's /dashboard_gui).
+"""The operator's dashboard: a web page for operation and settings (the paper's
+/dashboard_gui).
 
-Plain-Python state and rules here (no rospy, no NiceGUI) are unit-tested; ``page.py`` is
-the NiceGUI page and ``dashboard_node.py`` the ROS edge that feeds both.
+Its modules, by role:
+
+- state and readings (plain Python, unit-tested): ``state`` (``DashboardState``: ROS
+  callbacks write it, the page reads snapshots), ``path_buffer`` (the hand and tool
+  paths), ``readings`` (message contents as the page shows them), ``status_style`` (the
+  teleop status's name and colour);
+- rules and actions (plain Python): ``controls`` (which controls can act now, and why
+  not), ``jobs`` (program runs and kitting campaigns as child processes), ``programs``
+  (the taught programs on disk), ``access`` (who may open the page), ``config`` (the
+  node's parameters);
+- ``page``: the NiceGUI page;
+- ``dashboard_node``: the ROS edge (rospy): subscribers feed the state, actions call the
+  core's and the server's services, and the NiceGUI server runs in its process.
+
+The names in ``__all__`` are imported from their module on first use, so ``import
+dashboard`` loads neither NiceGUI nor rospy.
 """
+from importlib import import_module as _import_module
+
+# Public name -> the submodule that defines it.
+_PUBLIC = {
+    "DashboardState": "state",
+    "PathBuffer": "path_buffer",
+    "LatencyWindow": "readings",
+    "sequencer_counters": "readings",
+    "driver_status": "readings",
+    "tool_reading": "readings",
+    "status_view": "status_style",
+    "is_engaged": "status_style",
+    "STATUS_COLOURS": "status_style",
+    "ControlState": "controls",
+    "control_states": "controls",
+    "Job": "jobs",
+    "run_program_command": "jobs",
+    "campaign_command": "jobs",
+    "ProgramInfo": "programs",
+    "list_programs": "programs",
+    "program_path": "programs",
+    "delete_program": "programs",
+    "check_access_config": "access",
+    "token_accepted": "access",
+    "DASHBOARD_PARAMETERS": "config",
+    "DashboardPage": "page",
+    "serve": "page",
+    "DashboardNode": "dashboard_node",
+}
+__all__ = list(_PUBLIC)
+
+
+def __getattr__(name):
+    """Imports the submodule that defines ``name`` on first use (PEP 562)."""
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(_import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value  # the next look-up finds it without this function
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

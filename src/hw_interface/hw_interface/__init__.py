@@ -1,2 +1,69 @@
 """Hardware interface layer: the robot driver template, the driver registry, the drivers,
-and the command dispatcher behind motion_controller_server. No rospy import outside nodes/."""
+and the command dispatcher behind motion_controller_server.
+
+Its modules, by role:
+
+- the driver contract: ``robot_hw`` (``RobotDriver``, the template every driver
+  implements: the paper's API plus what real controllers need), ``registry`` (drivers by
+  name: the built-ins and any package's ``hw_interface.drivers`` entry point);
+- drivers: ``sim_driver`` (pybullet simulation), ``ur_driver`` (Universal Robots over
+  ur_rtde), with ``trajectory`` (MoveJ/MoveL time parameterisation) and
+  ``stream_follower`` (streamed joint targets within the velocity limits);
+- the server's core: ``protocol`` (commander.srv's command and result tables as enums),
+  ``dispatcher`` (checks every request, then calls the driver), ``server_params`` (the
+  server's parameters and its drivers' parameter check);
+- ``controller_client``: ``MotionControllerClient``, the Python client of
+  /motion_controller; a ROS edge (rospy and the generated ``motion_commander/commander``
+  service);
+- ``errors``: ``HwInterfaceError``;
+- ``testing``: test doubles (the fake UR controller), injected by registry name and
+  never imported by production code.
+
+The names in ``__all__`` are imported from their module on first use, so ``import
+hw_interface`` loads neither pybullet nor rospy.
+"""
+from importlib import import_module as _import_module
+
+# Public name -> the submodule that defines it.
+_PUBLIC = {
+    "RobotDriver": "robot_hw",
+    "DriverStatus": "robot_hw",
+    "UrdfModelMixin": "robot_hw",
+    "SimulatedScene": "robot_hw",
+    "register_driver": "registry",
+    "available_drivers": "registry",
+    "driver_factory": "registry",
+    "driver_parameters": "registry",
+    "create_driver": "registry",
+    "ENTRY_POINT_GROUP": "registry",
+    "PybulletSimDriver": "sim_driver",
+    "load_scene": "sim_driver",
+    "URRtdeDriver": "ur_driver",
+    "JointPath": "trajectory",
+    "StreamFollower": "stream_follower",
+    "CommandIndex": "protocol",
+    "Result": "protocol",
+    "CommandDispatcher": "dispatcher",
+    "CommandResult": "dispatcher",
+    "Workspace": "dispatcher",
+    "stop_driver": "dispatcher",
+    "SERVER_PARAMETERS": "server_params",
+    "check_server_params": "server_params",
+    "MotionControllerClient": "controller_client",
+    "HwInterfaceError": "errors",
+}
+__all__ = list(_PUBLIC)
+
+
+def __getattr__(name):
+    """Imports the submodule that defines ``name`` on first use (PEP 562)."""
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(_import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value  # the next look-up finds it without this function
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -1,1 +1,105 @@
-"""Vision-fed kitting cell: plain-Python foundations (no rospy). See the package README."""
+"""Application layer: the vision-fed kitting cell (its README has a line per module).
+
+Its modules, by role:
+
+- the cell as data: ``parts`` (the six part classes), ``cell`` (robot, belt, tray,
+  markers and camera from ``config/cell.yaml``), ``meshes`` (the parts' render meshes);
+- simulation: ``sim_scene`` (the cell in pybullet), ``cell_sim`` (its physics around the
+  simulated arm), ``camera`` (pinhole model and pybullet rendering), ``render_worker``
+  (rendering in a process of its own);
+- camera input: ``frame_source`` (webcam, video file, image folder), ``image_msgs``
+  (``sensor_msgs`` image and camera info conversions without cv_bridge),
+  ``intrinsics_file``, ``calibration`` (ChArUco intrinsics, marker extrinsics),
+  ``calibration_views`` (choosing calibration views from a stream);
+- vision: ``detector`` (classical OpenCV detector), ``onnx_detector`` (a YOLOv8 ONNX
+  model through onnxruntime), ``geometry`` (pixel to belt plane), ``vision`` (detections
+  to belt-plane poses), ``vision_pipeline`` (one image in, the parts on the belt out);
+- picking: ``tracking`` (a Kalman filter per part), ``intercept`` (where and when to meet
+  a part on the moving belt), ``picker`` (the kitting cycle), ``slot_program`` (tray slot
+  poses from a program taught by gesture), ``campaign`` (trials and their statistics).
+
+No module here imports rospy (``image_msgs`` uses the generated ``sensor_msgs`` classes
+only); the nodes are the ROS edges. The names in ``__all__`` are imported from their
+module on first use, so ``import kitting`` loads none of pybullet, cv2 or onnxruntime.
+"""
+from importlib import import_module as _import_module
+
+# Public name -> the submodule that defines it.
+_PUBLIC = {
+    "PartClass": "parts",
+    "PART_CLASSES": "parts",
+    "CLASS_NAMES": "parts",
+    "part_class": "parts",
+    "Cell": "cell",
+    "load_cell": "cell",
+    "cell_from_dict": "cell",
+    "DEFAULT_CELL": "cell",
+    "part_mesh": "meshes",
+    "SimScene": "sim_scene",
+    "render_board_views": "sim_scene",
+    "CellSimulation": "cell_sim",
+    "PinholeCamera": "camera",
+    "Lighting": "camera",
+    "render": "camera",
+    "RenderWorker": "render_worker",
+    "FrameSource": "frame_source",
+    "FrameSourceError": "frame_source",
+    "open_source": "frame_source",
+    "DeviceSource": "frame_source",
+    "VideoSource": "frame_source",
+    "ImageFolderSource": "frame_source",
+    "image_to_bgr": "image_msgs",
+    "bgr_to_image": "image_msgs",
+    "camera_info_from_intrinsics": "image_msgs",
+    "intrinsics_from_camera_info": "image_msgs",
+    "IntrinsicsFileError": "intrinsics_file",
+    "load_camera_info_yaml": "intrinsics_file",
+    "resolve_camera_info_url": "intrinsics_file",
+    "BoardSpec": "calibration",
+    "Intrinsics": "calibration",
+    "Extrinsics": "calibration",
+    "calibrate_intrinsics": "calibration",
+    "write_intrinsics_yaml": "calibration",
+    "extrinsics_from_marker": "calibration",
+    "ViewCollector": "calibration_views",
+    "ClassicalDetector": "detector",
+    "Detection": "detector",
+    "DetectionResult": "detector",
+    "OnnxDetector": "onnx_detector",
+    "OnnxModelError": "onnx_detector",
+    "pixel_to_belt": "geometry",
+    "pixels_to_plane": "geometry",
+    "BeltVision": "vision",
+    "PartObservation": "vision",
+    "VisionPipeline": "vision_pipeline",
+    "VisionResult": "vision_pipeline",
+    "BeltTracker": "tracking",
+    "Observation": "tracking",
+    "Track": "tracking",
+    "plan_intercept": "intercept",
+    "Intercept": "intercept",
+    "KittingPicker": "picker",
+    "PickAborted": "picker",
+    "KittingEvent": "picker",
+    "slots_from_program": "slot_program",
+    "TaughtSlots": "slot_program",
+    "SlotProgramError": "slot_program",
+    "plan_trials": "campaign",
+    "Trial": "campaign",
+    "CampaignStats": "campaign",
+}
+__all__ = list(_PUBLIC)
+
+
+def __getattr__(name):
+    """Imports the submodule that defines ``name`` on first use (PEP 562)."""
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(_import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value  # the next look-up finds it without this function
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

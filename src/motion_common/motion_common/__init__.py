@@ -1,7 +1,62 @@
 """Foundation layer of the framework, below sensing, hardware interface and core.
 
-It holds what more than one layer needs and none of them owns: the robot model (URDF
-loading, forward/inverse kinematics, joint limits, the shipped URDFs and start poses) and
-the one parameter validator every node uses. It imports none of the framework's packages,
-so every other package may import it without breaking the one-way layering.
+It holds what more than one layer needs and none of them owns, and imports none of the
+framework's packages, so every other package may import it without breaking the one-way
+layering. Its modules, by role:
+
+- robot model: ``kinematics`` (URDF loading with pinocchio, forward/inverse kinematics,
+  Jacobians, joint limits; the shipped URDFs are in ``urdf/``, start poses in
+  ``config/robots/``);
+- parameters: ``params`` (``ParamSchema``, the one validator every node's parameters go
+  through) and ``ros_params`` (reads a node's private parameters from the parameter
+  server through a schema: the package's only rospy import);
+- per-frame and file helpers: ``float_list`` (small vectors as plain floats on the
+  latency path), ``startup_heap`` (keeps a node's start-up heap out of the garbage
+  collector's scans), ``atomic_file`` (a saved file is either the old one or the new one);
+- ``errors``: ``RobotModelError``, ``ParameterError``.
+
+The names in ``__all__`` are imported from their module on first use, so ``import
+motion_common`` loads neither pinocchio nor rospy. ``float_list`` is not among them: the
+function shares its module's name, so use ``motion_common.float_list.float_list``.
 """
+from importlib import import_module as _import_module
+
+# Public name -> the submodule that defines it.
+_PUBLIC = {
+    "RobotKinematics": "kinematics",
+    "IkResult": "kinematics",
+    "LinePath": "kinematics",
+    "pose_to_se3": "kinematics",
+    "se3_to_pose": "kinematics",
+    "quat_to_matrix": "kinematics",
+    "matrix_to_quat": "kinematics",
+    "slerp": "kinematics",
+    "singular_values": "kinematics",
+    "solve_positive_definite": "kinematics",
+    "Param": "params",
+    "ParamSchema": "params",
+    "read_yaml_file": "params",
+    "check_ordered": "params",
+    "load_private_params": "ros_params",
+    "parameter_source": "ros_params",
+    "LAUNCH_KEYS": "ros_params",
+    "freeze_startup_heap": "startup_heap",
+    "write_atomic": "atomic_file",
+    "RobotModelError": "errors",
+    "ParameterError": "errors",
+}
+__all__ = list(_PUBLIC)
+
+
+def __getattr__(name):
+    """Imports the submodule that defines ``name`` on first use (PEP 562)."""
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(_import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value  # the next look-up finds it without this function
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
