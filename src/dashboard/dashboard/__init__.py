@@ -18,6 +18,7 @@ Its modules, by role:
 The names in ``__all__`` are imported from their module on first use, so ``import
 dashboard`` loads neither NiceGUI nor rospy.
 """
+
 from importlib import import_module as _import_module
 
 # Public name -> the submodule that defines it.

@@ -22,6 +22,7 @@ Its modules, by role:
 The names in ``__all__`` are imported from their module on first use, so ``import
 hw_interface`` loads neither pybullet nor rospy.
 """
+
 from importlib import import_module as _import_module
 
 # Public name -> the submodule that defines it.

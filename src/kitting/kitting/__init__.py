@@ -22,6 +22,7 @@ No module here imports rospy (``image_msgs`` uses the generated ``sensor_msgs`` 
 only); the nodes are the ROS edges. The names in ``__all__`` are imported from their
 module on first use, so ``import kitting`` loads none of pybullet, cv2 or onnxruntime.
 """
+
 from importlib import import_module as _import_module
 
 # Public name -> the submodule that defines it.

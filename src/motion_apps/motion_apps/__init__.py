@@ -14,6 +14,7 @@ Plain Python: no rospy outside ``nodes/``. The names in ``__all__`` are imported
 their module on first use, so ``import motion_apps`` loads neither pybullet nor
 pinocchio.
 """
+
 from importlib import import_module as _import_module
 
 # Public name -> the submodule that defines it.

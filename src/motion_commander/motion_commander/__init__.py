@@ -20,6 +20,7 @@ No module here imports rospy: the nodes (``nodes/``) are the ROS edges. The name
 ``__all__`` are imported from their module on first use, so ``import motion_commander``
 does not load pinocchio.
 """
+
 from importlib import import_module as _import_module
 
 # Public name -> the submodule that defines it.

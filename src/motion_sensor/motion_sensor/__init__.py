@@ -26,6 +26,7 @@ Its modules, by role:
 The names in ``__all__`` are imported from their module on first use, so ``import
 motion_sensor`` loads none of cv2, mediapipe, scipy or rospy.
 """
+
 from importlib import import_module as _import_module
 
 # Public name -> the submodule that defines it.

@@ -7,6 +7,7 @@ the fake is selected by that name.
 
 The names in ``__all__`` are imported from their module on first use.
 """
+
 from importlib import import_module as _import_module
 
 # Public name -> the submodule that defines it.
