@@ -5,7 +5,7 @@ path. The known affine transform of every frame is the ground truth of the image
 a point of the photo moves to ``transforms[i] @ (x, y, 1)``, and the hand's apparent size
 is proportional to ``scales[i]`` (so its depth to 1 / scales[i]).
 
-Used by tests/unit/test_webcam_hand_images.py and bench/webcam_hand_bench.py.
+Used by tests/unit/motion_sensor/test_webcam_hand_images.py and bench/webcam_hand_bench.py.
 """
 import os
 from dataclasses import dataclass

@@ -1,4 +1,5 @@
-"""Shared fixtures of the pure-Python suite (no roscore needed)."""
+"""Shared fixtures of the pure-Python suite (no roscore needed), for every folder below, and
+the paths its test modules import (``from ..conftest import DATA``)."""
 import os
 import sys
 

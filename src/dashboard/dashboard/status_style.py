@@ -4,7 +4,7 @@ from typing import Optional, Tuple
 from motion_commander.teleop_core import TeleopStatus
 
 # Green: streaming; amber: streaming but limited; orange: holding for a reason; red: the
-# e-stop; grey: idle. Every TeleopStatus has a colour (tests/unit/test_dashboard_state.py).
+# e-stop; grey: idle. Every TeleopStatus has a colour (tests/unit/dashboard/test_dashboard_state.py).
 STATUS_COLOURS = {
     TeleopStatus.WAITING_FOR_ROBOT: "grey",
     TeleopStatus.DISENGAGED: "grey",

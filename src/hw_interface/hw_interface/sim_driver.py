@@ -183,7 +183,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._efforts = np.array([self._client.getJointInfo(self._body, i)[10] for i in self._joint_indices])
         # pybullet's motor constraint is soft: coupled to gravity and to the other joints'
         # reactions it ran up to ~6 % past its maxVelocity over a few steps under a fuzzed
-        # stream (1 run in 4 of tests/unit/test_stream_speed.py). The motors are capped that
+        # stream (1 run in 4 of tests/unit/hw_interface/test_stream_speed.py). The motors are capped that
         # much below the URDF limit, so the measured speed stays within it.
         self._max_speeds = (self.kinematics.velocity_limits * MOTOR_SPEED_FRACTION).tolist()
         for index, value in zip(self._joint_indices, self._initial):

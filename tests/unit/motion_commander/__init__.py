@@ -1,0 +1,1 @@
+"""Unit tests of the motion_commander package (see ../__init__.py for the layout)."""
