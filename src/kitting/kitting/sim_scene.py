@@ -16,6 +16,8 @@ import cv2
 import numpy as np
 import pybullet as p
 
+from motion_common.rotations import matrix_to_quaternion
+
 from .cell import Cell
 from .meshes import part_mesh
 from .parts import part_class
@@ -78,16 +80,11 @@ def textured_quad(client: int, image: np.ndarray, size: Tuple[float, float], pos
                                  normals=[(0, 0, 1)] * len(vertices), rgbaColor=[1, 1, 1, 1],
                                  physicsClientId=client)
     body = p.createMultiBody(0.0, -1, visual, basePosition=pose[:3, 3].tolist(),
-                             baseOrientation=quaternion_from_matrix(pose[:3, :3]), physicsClientId=client)
+                             baseOrientation=matrix_to_quaternion(pose[:3, :3]).tolist(),
+                             physicsClientId=client)
     p.changeVisualShape(body, -1, textureUniqueId=load_texture(client, image), rgbaColor=[1, 1, 1, 1],
                         physicsClientId=client)
     return body
-
-
-def quaternion_from_matrix(rotation) -> List[float]:
-    """[x, y, z, w] of a 3x3 rotation matrix."""
-    from scipy.spatial.transform import Rotation
-    return Rotation.from_matrix(np.asarray(rotation, float)).as_quat().tolist()
 
 
 def _box(client, half_extents, position, rgba, yaw=0.0, collide=True) -> int:

@@ -13,7 +13,8 @@ import numpy as np
 import pinocchio as pin
 
 from motion_common.float_list import float_list
-from motion_common.kinematics import RobotKinematics, matrix_to_quat
+from motion_common.kinematics import RobotKinematics
+from motion_common.rotations import is_unit_quaternion, matrix_to_quaternion
 from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
                      WorkspaceFence, condition_certainly_below, condition_number, extreme_singular_values)
 from .teleop import AutoClutch, TeleopMapper
@@ -82,7 +83,7 @@ class TeleopCommand:
     def target_orientation(self) -> np.ndarray:
         """The target rotation as a quaternion (x, y, z, w); computed when asked for, i.e.
         after the command has left, not on every frame's latency."""
-        return matrix_to_quat(self.target_rotation)
+        return matrix_to_quaternion(self.target_rotation)
 
 
 class TeleopCore:
@@ -176,8 +177,7 @@ class TeleopCore:
             p, q = float_list(position), float_list(orientation)
         except (TypeError, ValueError):
             p, q = [], []
-        if not (len(p) == 3 and len(q) == 4 and all(map(math.isfinite, p + q))
-                and abs(math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]) - 1.0) < 1e-3):
+        if not (len(p) == 3 and len(q) == 4 and all(map(math.isfinite, p + q)) and is_unit_quaternion(q)):
             self.status = TeleopStatus.BAD_INPUT
             return None
         position, orientation = p, q  # the mapper takes float lists
@@ -247,8 +247,11 @@ class TeleopCore:
         """Joints reaching ``fraction`` of the way from the commanded tool pose to the target
         (whose IK solution is ``goal``, also the fallback when this IK fails)."""
         start_position, start_orientation = self._pose_at_command()
-        # Plain floats and pinocchio's own quaternion: fewer numpy calls on the frame's latency.
-        rotation = pin.Quaternion(start_orientation).slerp(fraction, pin.Quaternion(target_rotation)).matrix()
+        # Plain floats and pinocchio's own quaternion: fewer numpy calls on the frame's
+        # latency. The target goes in as coefficients: pinocchio's matrix constructor of a
+        # quaternion leaks memory on every call.
+        target = pin.Quaternion(matrix_to_quaternion(target_rotation))
+        rotation = pin.Quaternion(start_orientation).slerp(fraction, target).matrix()
         position = np.array([s + fraction * (t - s) for s, t in zip(start_position.tolist(), target_position.tolist())])
         # Seeded the same fraction of the way in joint space: for the small steps of a
         # stream that point already lies within the IK's tolerance of the Cartesian one

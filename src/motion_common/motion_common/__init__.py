@@ -10,6 +10,8 @@ layering. Its modules, by role:
 - parameters: ``params`` (``ParamSchema``, the one validator every node's parameters go
   through) and ``ros_params`` (reads a node's private parameters from the parameter
   server through a schema: the package's only rospy import);
+- geometry: ``rotations`` (quaternions x, y, z, w and rotation matrices in plain numpy: the
+  unit-quaternion check, matrix to quaternion, the Hamilton product);
 - per-frame and file helpers: ``float_list`` (small vectors as plain floats on the
   latency path), ``startup_heap`` (keeps a node's start-up heap out of the garbage
   collector's scans), ``atomic_file`` (a saved file is either the old one or the new one);
@@ -33,6 +35,12 @@ _PUBLIC = {
     "slerp": "kinematics",
     "singular_values": "kinematics",
     "solve_positive_definite": "kinematics",
+    "UNIT_QUATERNION_TOLERANCE": "rotations",
+    "is_unit_quaternion": "rotations",
+    "quaternion_norm": "rotations",
+    "matrix_to_quaternion": "rotations",
+    "multiply_quaternions": "rotations",
+    "with_positive_w": "rotations",
     "Param": "params",
     "ParamSchema": "params",
     "read_yaml_file": "params",

@@ -10,6 +10,7 @@ import pinocchio as pin
 from scipy.linalg import lapack
 
 from .errors import RobotModelError
+from .rotations import matrix_to_quaternion
 
 
 def solve_positive_definite(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
@@ -56,8 +57,9 @@ def quat_to_matrix(quaternion) -> np.ndarray:
 
 
 def matrix_to_quat(matrix) -> np.ndarray:
-    """Quaternion (x, y, z, w) of a 3x3 rotation matrix."""
-    return np.array(pin.Quaternion(np.asarray(matrix, dtype=float)).coeffs())
+    """Quaternion (x, y, z, w) of a 3x3 rotation matrix (``rotations.matrix_to_quaternion``:
+    pinocchio's matrix constructor of a quaternion leaks memory on every call)."""
+    return matrix_to_quaternion(matrix)
 
 
 def slerp(q0, q1, fraction: float) -> np.ndarray:

@@ -31,12 +31,10 @@ from typing import Callable, Dict, Iterable, Optional, Tuple
 import numpy as np
 
 from motion_common.params import ParamSchema
+from motion_common.rotations import is_unit_quaternion
 
 from .errors import DeviceUnavailable, EndOfStream, MotionSensorError
 from .hand_sample import HandSample
-
-# Quaternions further than this from unit norm were not produced as rotations.
-UNIT_QUATERNION_TOLERANCE = 1e-3
 
 _LOG = logging.getLogger("motion_sensor.device")
 
@@ -101,7 +99,7 @@ def sample_problem(sample: HandSample) -> Optional[str]:
         return f"position {position.tolist()} is not 3 finite numbers"
     if orientation.shape != (4,) or not np.all(np.isfinite(orientation)):
         return f"orientation {orientation.tolist()} is not 4 finite numbers"
-    if abs(float(np.linalg.norm(orientation)) - 1.0) > UNIT_QUATERNION_TOLERANCE:
+    if not is_unit_quaternion(orientation.tolist()):
         return f"orientation {orientation.tolist()} is not a unit quaternion"
     return None
 

@@ -21,6 +21,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from motion_common.rotations import matrix_to_quaternion, with_positive_w
+
 from .camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
 
 WRIST = 0
@@ -139,14 +141,6 @@ def palm_rotation(world: np.ndarray, handedness: str) -> np.ndarray:
     return np.column_stack([x_axis, y_axis, z_axis])
 
 
-def matrix_to_quaternion(matrix: np.ndarray) -> np.ndarray:
-    """Unit quaternion (x, y, z, w) of a rotation matrix, w >= 0."""
-    from scipy.spatial.transform import Rotation
-
-    quaternion = Rotation.from_matrix(matrix).as_quat()
-    return -quaternion if quaternion[3] < 0 else quaternion
-
-
 def finger_curls(world: np.ndarray) -> np.ndarray:
     """The four fingers' curl (degrees): the sum of the bends at their three joints (wrist-
     to-base against base-to-middle joint, and so on to the tip); about 0 for a straight
@@ -216,7 +210,7 @@ def palm_pose(hand: DetectedHand, intrinsics: Intrinsics, depth_scale: float = 1
     raw_depth = float(raw_centre[2])
     rotation = palm_rotation(world, hand.handedness)
     return PalmPose(position=OPTICAL_TO_REP103 @ centre,
-                    orientation=matrix_to_quaternion(OPTICAL_TO_REP103 @ rotation),
+                    orientation=with_positive_w(matrix_to_quaternion(OPTICAL_TO_REP103 @ rotation)),
                     index_tip=OPTICAL_TO_REP103 @ index_tip,
                     grab_strength=grab_strength(world, thresholds),
                     pinch_strength=pinch_strength(world, thresholds),

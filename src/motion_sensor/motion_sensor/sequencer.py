@@ -26,16 +26,13 @@ import numpy as np
 from .errors import MotionSensorError
 from motion_common.float_list import float_list
 from motion_common.params import Param, ParamSchema
+from motion_common.rotations import is_unit_quaternion, multiply_quaternions, quaternion_norm
 
 from .filters import FILTER_PARAMS, FILTERS, make_filter
 from .hand_sample import HandSample
 
 # Drops that are the sequencer doing its job, not bad input: counted, never warned about.
 EXPECTED_DROPS = frozenset({"entry_trim", "exit_trim", "no_hand", "inactive_device"})
-
-# Quaternions from drivers are normalised in float64; anything further than this from
-# unit norm was not produced as a rotation.
-UNIT_QUATERNION_TOLERANCE = 1e-3
 
 
 @dataclass
@@ -161,7 +158,7 @@ def validate_sample(sample: HandSample) -> Optional[str]:
         return "malformed"
     if not all(map(math.isfinite, position + orientation)) or not math.isfinite(sample.stamp):
         return "non_finite"
-    if abs(math.sqrt(sum(v * v for v in orientation)) - 1.0) > UNIT_QUATERNION_TOLERANCE:
+    if not is_unit_quaternion(orientation):
         return "non_unit_quaternion"
     if sample.hands_num != len(sample.hand_types):
         return "hands_num_mismatch"
@@ -380,12 +377,12 @@ class Sequencer:
             last = self._last_output
             self._offset_position = [a - b for a, b in zip(last.position.tolist(), position)]
             qx, qy, qz, qw = orientation
-            self._offset_rotation = _quat_multiply_floats(last.orientation.tolist(), (-qx, -qy, -qz, qw))
+            self._offset_rotation = multiply_quaternions(last.orientation.tolist(), (-qx, -qy, -qz, qw))
             self._continuity_pending = False
         # Plain floats for the offsets (every frame), one array each at the end.
         position = np.array([p + o for p, o in zip(position, self._offset_position)])
-        x, y, z, w = _quat_multiply_floats(self._offset_rotation, orientation)
-        norm = math.sqrt(x * x + y * y + z * z + w * w)
+        x, y, z, w = multiply_quaternions(self._offset_rotation, orientation)
+        norm = quaternion_norm((x, y, z, w))
         orientation = np.array([x / norm, y / norm, z / norm, w / norm])
         out = SequencedPose(sample.stamp, position, orientation, sample.frame_id, sample.primary_type,
                             sample.hands_num, sample.device)
@@ -398,12 +395,3 @@ def _distance(a, b) -> float:
     """Euclidean distance of two 3-sequences of floats."""
     return math.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
 
-
-def _quat_multiply_floats(a, b) -> tuple:
-    """Hamilton product of quaternions (x, y, z, w), as a tuple of floats."""
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-            aw * bw - ax * bx - ay * by - az * bz)
