@@ -31,8 +31,8 @@ from .jobs import Job, campaign_command, run_program_command
 from .readings import driver_status, sequencer_counters, tool_reading
 from .state import DashboardState
 
-LATCH_SERVICE = "/motion_controller/latch_stop"
-SPAWN_SERVICE = "/kitting_cell_sim/spawn"
+LATCH_SERVICE = "motion_controller/latch_stop"
+SPAWN_SERVICE = "kitting_cell_sim/spawn"
 
 
 class DashboardNode:
@@ -47,30 +47,30 @@ class DashboardNode:
         self.fallback_estop = False
         self.programs_dir = os.path.abspath(params["programs_dir"])
         self.output_dir = os.path.abspath(params["output_dir"])
-        self.engage_pub = rospy.Publisher("/motion_commander/engage", Bool, queue_size=1)
-        self.estop_pub = rospy.Publisher("/motion_commander/estop", Bool, queue_size=1)
-        self.ratio_pub = rospy.Publisher("/motion_commander/set_speed_ratio", Float64, queue_size=1)
-        self.filter_pub = rospy.Publisher("/motion_sensor/set_filter", String, queue_size=1)
-        self.campaign_stop_pub = rospy.Publisher("/kitting_trials/stop", Bool, queue_size=1)
+        self.engage_pub = rospy.Publisher("motion_commander/engage", Bool, queue_size=1)
+        self.estop_pub = rospy.Publisher("motion_commander/estop", Bool, queue_size=1)
+        self.ratio_pub = rospy.Publisher("motion_commander/set_speed_ratio", Float64, queue_size=1)
+        self.filter_pub = rospy.Publisher("motion_sensor/set_filter", String, queue_size=1)
+        self.campaign_stop_pub = rospy.Publisher("kitting_trials/stop", Bool, queue_size=1)
         self.latch = rospy.ServiceProxy(LATCH_SERVICE, SetBool)
         s = self.state
         subscribe = rospy.Subscriber
-        subscribe("/motion_commander/status", UInt8, lambda m: s.set("status", int(m.data)), queue_size=10)
-        subscribe("/motion_controller/stop_latched", Bool, lambda m: s.set("stop_latched", bool(m.data)), queue_size=5)
-        subscribe("/motion_commander/speed_ratio", Float64, lambda m: s.set("speed_ratio", float(m.data)), queue_size=5)
-        subscribe("/motion_sensor/filter", String, lambda m: s.set("filter", m.data), queue_size=5)
-        subscribe("/motion_sensor/active_device", String, lambda m: s.set("device", m.data), queue_size=5)
-        subscribe("/motion_sensor/raw_hand", hand, self.on_hand, queue_size=1)
-        subscribe("/motion_sensor/gesture", Gesture, self.on_gesture, queue_size=10)
-        subscribe("/teach/feedback", String, lambda m: s.set("teach_feedback", m.data), queue_size=10)
-        subscribe("/motion_commander/latency", StageLatency, lambda m: s.add_latency(m.driver), queue_size=100)
-        subscribe("/joint_states", JointState, self.on_joints, queue_size=1)
-        subscribe("/motion_controller/tool_pose", PoseStamped, self.on_tool, queue_size=1)
-        subscribe("/motion_commander/target", PoseStamped, self.on_target, queue_size=10)
-        subscribe("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=10)
-        subscribe("/motion_controller/status", DiagnosticStatus, self.on_driver, queue_size=5)
-        subscribe("/kitting_trials/progress", String, lambda m: self.on_campaign("campaign_progress", m), queue_size=5)
-        subscribe("/kitting_trials/result", String, lambda m: self.on_campaign("campaign_result", m), queue_size=5)
+        subscribe("motion_commander/status", UInt8, lambda m: s.set("status", int(m.data)), queue_size=10)
+        subscribe("motion_controller/stop_latched", Bool, lambda m: s.set("stop_latched", bool(m.data)), queue_size=5)
+        subscribe("motion_commander/speed_ratio", Float64, lambda m: s.set("speed_ratio", float(m.data)), queue_size=5)
+        subscribe("motion_sensor/filter", String, lambda m: s.set("filter", m.data), queue_size=5)
+        subscribe("motion_sensor/active_device", String, lambda m: s.set("device", m.data), queue_size=5)
+        subscribe("motion_sensor/raw_hand", hand, self.on_hand, queue_size=1)
+        subscribe("motion_sensor/gesture", Gesture, self.on_gesture, queue_size=10)
+        subscribe("teach/feedback", String, lambda m: s.set("teach_feedback", m.data), queue_size=10)
+        subscribe("motion_commander/latency", StageLatency, lambda m: s.add_latency(m.driver), queue_size=100)
+        subscribe("joint_states", JointState, self.on_joints, queue_size=1)
+        subscribe("motion_controller/tool_pose", PoseStamped, self.on_tool, queue_size=1)
+        subscribe("motion_commander/target", PoseStamped, self.on_target, queue_size=10)
+        subscribe("diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=10)
+        subscribe("motion_controller/status", DiagnosticStatus, self.on_driver, queue_size=5)
+        subscribe("kitting_trials/progress", String, lambda m: self.on_campaign("campaign_progress", m), queue_size=5)
+        subscribe("kitting_trials/result", String, lambda m: self.on_campaign("campaign_result", m), queue_size=5)
         self.poll(None)
         self.poll_timer = rospy.Timer(rospy.Duration(1.0), self.poll)
 
@@ -110,7 +110,7 @@ class DashboardNode:
     def poll(self, _event):
         """Once a second: which services exist, and the core's engage mode."""
         self.state.update(server_up=_service_exists(LATCH_SERVICE), kitting_cell=_service_exists(SPAWN_SERVICE))
-        mode = self.params["engage_mode"] or rospy.get_param("/motion_commander/engage", "")
+        mode = self.params["engage_mode"] or rospy.get_param("motion_commander/engage", "")
         self.state.set("engage_mode", mode)
 
     # -- actions (called by the page, off its event loop) ----------------------------------------

@@ -17,7 +17,7 @@ from .protocol import CommandIndex, Result
 class MotionControllerClient:
     """Keeps one persistent connection to the service and re-opens it if it drops."""
 
-    def __init__(self, service: str = "/motion_controller", timeout: float = 10.0):
+    def __init__(self, service: str = "motion_controller", timeout: float = 10.0):
         self.service = service
         try:
             rospy.wait_for_service(service, timeout=timeout)

@@ -19,7 +19,7 @@ SERVER_PARAMETERS = ParamSchema([
     Param("login_url", "", doc="controller to log in to at start-up; empty: wait for LOGIN"),
     Param("user", "", doc="controller user for LOGIN"),
     Param("password", "", doc="controller password for LOGIN"),
-    Param("publish_rate", 100.0, "Hz", "/joint_states and /motion_controller/tool_pose rate", low=1.0, high=1000.0),
+    Param("publish_rate", 100.0, "Hz", "joint_states and motion_controller/tool_pose rate", low=1.0, high=1000.0),
     Param("max_stream_step", 0.2, "rad", "largest joint change one SET_JOINTS may ask for", low=0.0, high=3.2,
           low_open=True),
     Param("max_stream_lag", 0.6, "rad", "largest distance a SET_JOINTS target may run ahead of the measured "

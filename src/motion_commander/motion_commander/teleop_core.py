@@ -12,7 +12,9 @@ from typing import Optional
 import numpy as np
 import pinocchio as pin
 
+from motion_common.errors import ParameterError
 from motion_common.float_list import float_list
+from motion_common.params import Param, ParamSchema
 from motion_common.kinematics import RobotKinematics
 from motion_common.rotations import is_unit_quaternion, matrix_to_quaternion
 from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
@@ -51,21 +53,53 @@ class Action(enum.Enum):
     DISENGAGE = 2   # hand lost: disengage (and hold)
 
 
+#: The safety rules' parameters (moveit_servo's set), declared once: the node's schema
+#: (motion_commander.config) and ``SafetyConfig`` both take their defaults from here.
+SAFETY_PARAMS = ParamSchema([
+    Param("joint_speed_scale", 1.0, "fraction", "of the URDF joint velocity limits", low=0.0, high=1.0,
+          low_open=True),
+    Param("joint_acceleration", 200.0, "rad/s^2", "change of commanded joint velocity; the limiter also brakes to "
+          "stop at the target (empty: unlimited)", kind=float, low=0.0, high=1000.0, low_open=True, nullable=True),
+    Param("joint_limit_margin", 0.05, "rad", "kept clear of every URDF joint limit", low=0.0, high=0.5),
+    # UR5e: 8 at home, 40 with the wrist (q5) or elbow (q3) ~0.2 rad from straight.
+    Param("singularity_slowdown", 40.0, "condition number", "motion toward a singularity slows here",
+          low=1.0, high=1e6),
+    Param("singularity_halt", 80.0, "condition number", "motion toward a singularity stops here",
+          low=1.0, high=1e6),
+    Param("workspace_lower", [-1.2, -1.2, 0.0], "m", "tool target box, robot base frame", length=3, low=-10,
+          high=10),
+    Param("workspace_upper", [1.2, 1.2, 1.3], "m", "tool target box, robot base frame", length=3, low=-10,
+          high=10),
+    Param("floor_z", 0.02, "m", "the tool target never goes below this height", low=-10.0, high=10.0),
+    Param("engage_ramp_s", 0.3, "s", "speed ramps from 0 after engage or resume", low=0.0, high=10.0),
+    Param("stale_timeout_s", 0.1, "s", "without a fresh command before the robot is halted", low=0.0, high=5.0,
+          low_open=True),
+])
+
+
 @dataclass
 class SafetyConfig:
-    """Safety parameters (units in the names)."""
+    """Safety parameters; defaults, units and ranges are those of ``SAFETY_PARAMS``, and a
+    value out of range raises ParameterError when the config is built."""
 
-    joint_speed_scale: float = 0.5
-    joint_acceleration: Optional[float] = None   # rad/s^2
-    joint_limit_margin: float = 0.05             # rad
-    # UR5e: 8 at home, 40 with the wrist (q5) or elbow (q3) ~0.2 rad from straight.
-    singularity_slowdown: float = 40.0
-    singularity_halt: float = 80.0
-    workspace_lower: list = field(default_factory=lambda: [-1.5, -1.5, 0.0])   # m
-    workspace_upper: list = field(default_factory=lambda: [1.5, 1.5, 1.5])     # m
-    floor_z: float = 0.0                         # m
-    engage_ramp_s: float = 0.3
-    stale_timeout_s: float = 0.1
+    joint_speed_scale: float = SAFETY_PARAMS.field("joint_speed_scale")
+    joint_acceleration: Optional[float] = SAFETY_PARAMS.field("joint_acceleration")
+    joint_limit_margin: float = SAFETY_PARAMS.field("joint_limit_margin")
+    singularity_slowdown: float = SAFETY_PARAMS.field("singularity_slowdown")
+    singularity_halt: float = SAFETY_PARAMS.field("singularity_halt")
+    workspace_lower: list = SAFETY_PARAMS.field("workspace_lower")
+    workspace_upper: list = SAFETY_PARAMS.field("workspace_upper")
+    floor_z: float = SAFETY_PARAMS.field("floor_z")
+    engage_ramp_s: float = SAFETY_PARAMS.field("engage_ramp_s")
+    stale_timeout_s: float = SAFETY_PARAMS.field("stale_timeout_s")
+
+    def __post_init__(self):
+        SAFETY_PARAMS.check_fields(self, "SafetyConfig")
+        if self.singularity_slowdown >= self.singularity_halt:
+            raise ParameterError(f"singularity_slowdown ({self.singularity_slowdown}) must be below "
+                                 f"singularity_halt ({self.singularity_halt})")
+        if any(low >= high for low, high in zip(self.workspace_lower, self.workspace_upper)):
+            raise ParameterError("workspace_lower must be below workspace_upper on every axis")
 
 
 @dataclass

@@ -8,6 +8,8 @@ and returns a complete dict with defaults filled in. Anything wrong stops the no
 error too, listing the valid keys, so a misspelt safety setting never silently leaves its
 default in force. No ROS import: ``motion_common.ros_params`` reads the parameter server.
 """
+import copy
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Dict, Iterable, Optional, Sequence, Tuple
@@ -172,6 +174,26 @@ class ParamSchema:
             if name in self.params:
                 result[name] = self.params[name].check(value, source)
         return result
+
+    def default(self, name: str):
+        """A fresh copy of parameter ``name``'s declared default."""
+        return copy.deepcopy(self.params[name].default)
+
+    def field(self, name: str):
+        """A dataclass field whose default is parameter ``name``'s declared default, so a
+        typed config built from Python gets exactly what a launched node gets (no second
+        copy of the value in the dataclass)."""
+        return dataclasses.field(default_factory=lambda: self.default(name))
+
+    def check_fields(self, config, source: str, names: Optional[Dict[str, str]] = None) -> None:
+        """Check a typed config's fields against their declarations (ParameterError naming
+        ``source`` and the key). ``names`` maps a field to its parameter where they differ;
+        fields that are not parameters are skipped."""
+        names = names or {}
+        for item in dataclasses.fields(config):
+            key = names.get(item.name, item.name)
+            if key in self.params:
+                setattr(config, item.name, self.params[key].check(getattr(config, item.name), source))
 
     def describe(self) -> str:
         """Every parameter, one line each, for --help."""

@@ -19,6 +19,8 @@ from motion_common.params import Param, ParamSchema
 from .depth_hand import TRACKER_PARAMS, DepthHandTracker
 from .camera_intrinsics import Intrinsics
 from .depth_image import DepthImageError, decode_depth, intrinsics_from_camera_info
+from motion_common.interface import Topic
+
 from .device import HandDevice, empty_sample
 from .hand_sample import HandSample
 
@@ -77,9 +79,10 @@ class DepthTopicDevice(DepthHandDevice):
     """
 
     name = "depth"
+    # The node subscribes these (launch files remap them to the camera's topics).
+    subscribes = (Topic("camera/depth/image_raw", "sensor_msgs/Image", "depth image, 16UC1 (mm) or 32FC1 (m)"),
+                  Topic("camera/depth/camera_info", "sensor_msgs/CameraInfo", "intrinsics of that image"))
     params = TRACKER_PARAMS.merged(IMAGE_CHECK_PARAMS).merged(ParamSchema([
-        Param("image_topic", "/camera/depth/image_raw", doc="sensor_msgs/Image depth topic, 16UC1 (mm) or 32FC1 (m)"),
-        Param("camera_info_topic", "/camera/depth/camera_info", doc="sensor_msgs/CameraInfo of that image"),
         Param("wait_s", 0.2, unit="s", low=0, low_open=True, doc="read() returns empty-handed after this long"),
     ]))
 
@@ -90,7 +93,7 @@ class DepthTopicDevice(DepthHandDevice):
         self.info_problem = "no CameraInfo received yet"
 
     def describe(self) -> str:
-        return f"depth camera {self.config['image_topic']}"
+        return "depth camera (camera/depth/image_raw)"
 
     def feed_info(self, k, width: int, height: int) -> None:
         """A CameraInfo arrived (K row-major, image size)."""
@@ -129,7 +132,7 @@ class DepthTopicDevice(DepthHandDevice):
         intrinsics = self.intrinsics
         if intrinsics is None:
             reason = "no_camera_info" if self.info_problem.startswith("no CameraInfo") else "invalid_camera_info"
-            self.reject(reason, self.info_problem + f" (on {self.config['camera_info_topic']})")
+            self.reject(reason, self.info_problem + " (on camera/depth/camera_info)")
             return None
         try:
             depth = decode_depth(message.encoding, message.width, message.height, message.step, message.data,

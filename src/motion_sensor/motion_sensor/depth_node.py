@@ -4,6 +4,8 @@ CameraInfo subscribers that feed it; for the Kinect, the choice between the devi
 fakenect dump (``~fakenect_dump``) made before the wrapper is built.
 """
 import rospy
+
+from motion_common.ros_interface import subscriber
 from sensor_msgs.msg import CameraInfo, Image
 
 from .depth_device import DepthMessage, DepthTopicDevice
@@ -25,10 +27,10 @@ def run_depth_node(node_name: str = "depth_hand_driver") -> None:
                                        height=msg.height, step=msg.step, data=msg.data,
                                        is_bigendian=bool(msg.is_bigendian)))
 
-    rospy.Subscriber(device.config["camera_info_topic"], CameraInfo, on_info, queue_size=1)
+    subscriber(node.interface, "camera/depth/camera_info", on_info, queue_size=1)
     # A 640x480 16UC1 image is 600 kB: a large buffer keeps rospy from queueing stale ones.
-    rospy.Subscriber(device.config["image_topic"], Image, on_image, queue_size=2, buff_size=1 << 24,
-                     tcp_nodelay=True)
+    subscriber(node.interface, "camera/depth/image_raw", on_image, queue_size=2, buff_size=1 << 24,
+               tcp_nodelay=True)
     spin_device_node(node)
 
 

@@ -30,13 +30,29 @@ from typing import Callable, Dict, Iterable, Optional, Tuple
 
 import numpy as np
 
-from motion_common.params import ParamSchema
+from motion_common.params import Param, ParamSchema
 from motion_common.rotations import is_unit_quaternion
 
 from .errors import DeviceUnavailable, EndOfStream, MotionSensorError
 from .hand_sample import HandSample
 
 _LOG = logging.getLogger("motion_sensor.device")
+
+
+
+#: A device that sees both hands follows only this one when set: the two devices of a
+#: bimanual session each take one hand of the same stream, and neither ever falls over
+#: to the other hand when its own leaves the view.
+HAND_TYPE_PARAM = Param("hand_type", "", choices=("", "left", "right"),
+                        doc="follow only this hand (empty: primary_hand picks, falling back to the other)")
+
+
+def hand_preference(config: dict) -> Tuple[str, bool]:
+    """(preferred hand type, strict) of a device config with ``primary_hand`` and
+    ``hand_type``: a set ``hand_type`` wins and is strict."""
+    if config.get("hand_type"):
+        return config["hand_type"], True
+    return config["primary_hand"], False
 
 
 class Backoff:
@@ -131,6 +147,7 @@ class HandDevice(abc.ABC):
     wrapper_defaults: Dict[str, object] = {}   # the device's defaults for wrapper parameters
     # Extra latched std_msgs/Bool outputs: key -> topic; the device calls emit(key, value).
     bool_outputs: Dict[str, str] = {}
+    subscribes: tuple = ()   # motion_common.interface.Topic entries the node feeds the device from
 
     def __init__(self, config: dict, clock: Callable[[], float] = time.time,
                  sleep: Callable[[float], object] = time.sleep):

@@ -5,59 +5,36 @@ device classes do not). A device executable is three lines:
     from motion_sensor.leap_client import LeapDevice
     run_device_node(LeapDevice, "leap_driver")
 
-It reads the node's private parameters through the device's ParamSchema merged with
-WRAPPER_PARAMS (a bad or unknown key stops the node naming the file, the key and the valid
-keys), waits until the session is ready (``~ready_topic`` True, ``~min_subscribers`` on
-``~topic``, then ``~start_delay``), streams through a DeviceRunner (reconnect with
-backoff, bad samples dropped and counted), publishes motion_sensor/hand on ``~topic``,
-the device's Bool outputs (latched), counters on /diagnostics, and for a finite device a
-latched ``~finished`` (False at start, True at the end, then the node exits).
+Its interface is ``device_interface.device_interface(device_cls, node_name)``: the
+device's parameters merged with WRAPPER_PARAMS (a bad or unknown key stops the node naming
+the file, the key and the valid keys) and the topics below, all relative. It waits until
+the session is ready (with ``~wait_for_ready``, True on ``session_ready``;
+``~min_subscribers`` on ``motion_sensor/raw_hand``; then ``~start_delay``), streams through
+a DeviceRunner (reconnect with backoff, bad samples dropped and counted), publishes
+``motion_sensor/raw_hand``, the device's Bool outputs (latched), counters on
+``diagnostics``, and for a finite device a latched ``~finished`` (False at start, True at
+the end, then the node exits).
 """
-import dataclasses
-
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from std_msgs.msg import Bool
 
 from motion_common.errors import ParameterError
-from motion_common.params import Param, ParamSchema
-from motion_common.ros_params import load_private_params
+from motion_common.ros_interface import load_params, publisher, subscriber
 from motion_common.startup_heap import freeze_startup_heap
 
+from .device_interface import WRAPPER_PARAMS, device_interface, node_schema  # noqa: F401 (re-export)
 from .device import Backoff, DeviceRunner, HandDevice, wait_until_ready
 from .errors import MotionSensorError
-from motion_sensor.msg import hand
 from .ros_conversions import sample_to_msg
-
-WRAPPER_PARAMS = ParamSchema([
-    Param("topic", "/motion_sensor/raw_hand", doc="motion_sensor/hand output topic"),
-    Param("frame_id", "", doc="header.frame_id of the samples; empty: the device's default"),
-    Param("ready_topic", "", doc="std_msgs/Bool topic; streaming starts once True arrives (empty: do not wait)"),
-    Param("min_subscribers", 0, low=0, doc="streaming starts once ~topic has this many subscribers"),
-    Param("start_delay", 0.0, unit="s", low=0, doc="extra wait after readiness (compatibility; prefer ready_topic)"),
-    Param("backoff_initial_s", 0.25, unit="s", low=0, low_open=True, doc="first reconnect delay"),
-    Param("backoff_max_s", 5.0, unit="s", low=0, low_open=True, doc="longest reconnect delay"),
-    Param("backoff_factor", 2.0, low=1, doc="reconnect delay growth per failed attempt"),
-    Param("diagnostics_period_s", 1.0, unit="s", low=0, low_open=True, doc="/diagnostics period"),
-    Param("queue_size", 0, low=0,
-          doc="publisher queue size; 0: the device thread writes each message to its subscribers itself "
-              "(no hand-off to rospy's writer thread: ~0.1-0.3 ms less latency per hop, bench/e2e_latency)"),
-])
-
-
-def node_schema(device_cls) -> ParamSchema:
-    """The device's parameters and the wrapper's, with the device's wrapper defaults."""
-    wrapper = ParamSchema([dataclasses.replace(p, default=device_cls.wrapper_defaults[p.name])
-                           if p.name in device_cls.wrapper_defaults else p for p in WRAPPER_PARAMS.params.values()])
-    return device_cls.params.merged(wrapper)
-
 
 class DeviceNode:
     """ROS wiring of one HandDevice through a DeviceRunner."""
 
     def __init__(self, device_cls, node_name: str):
         self.node_name = node_name
-        self.config = load_private_params(node_schema(device_cls), node_name)
+        self.interface = device_interface(device_cls, node_name)
+        self.config = load_params(self.interface)
         try:
             self.device: HandDevice = device_cls(self.config, clock=rospy.get_time, sleep=rospy.sleep)
         except (MotionSensorError, ParameterError, OSError) as exc:
@@ -68,19 +45,19 @@ class DeviceNode:
         # queue_size None is rospy's synchronous publish: the device thread does the socket
         # write itself. Hand frames are small and the device thread has nothing else to do,
         # so the queue's thread hand-off would only add latency.
-        self.publisher = rospy.Publisher(self.config["topic"], hand, queue_size=self.config["queue_size"] or None,
-                                         tcp_nodelay=True)
-        self.bool_pubs = {key: rospy.Publisher(topic, Bool, queue_size=1, latch=True)
+        self.publisher = publisher(self.interface, "motion_sensor/raw_hand",
+                                   queue_size=self.config["queue_size"] or None, tcp_nodelay=True)
+        self.bool_pubs = {key: publisher(self.interface, topic, queue_size=1)
                           for key, topic in device_cls.bool_outputs.items()}
         self.finished_pub = None
         if device_cls.finite:
-            self.finished_pub = rospy.Publisher("~finished", Bool, queue_size=1, latch=True)
+            self.finished_pub = publisher(self.interface, "~finished", queue_size=1)
             self.finished_pub.publish(Bool(False))
-        self.diag_pub = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=5)
+        self.diag_pub = publisher(self.interface, "diagnostics", queue_size=5)
         self.ready = False
         self.state = "starting"
-        if self.config["ready_topic"]:
-            rospy.Subscriber(self.config["ready_topic"], Bool, self._on_ready, queue_size=1)
+        if self.config["wait_for_ready"]:
+            self.ready_sub = subscriber(self.interface, "session_ready", self._on_ready, queue_size=1)
         backoff = Backoff(self.config["backoff_initial_s"], self.config["backoff_factor"],
                           max(self.config["backoff_max_s"], self.config["backoff_initial_s"]))
         self.runner = DeviceRunner(self.device, self._publish, rospy.is_shutdown, backoff,
@@ -99,8 +76,8 @@ class DeviceNode:
     def wait_until_ready(self) -> bool:
         """Block until the session is ready to receive the stream."""
         conditions = []
-        if self.config["ready_topic"]:
-            conditions.append((f"True on {self.config['ready_topic']}", lambda: self.ready))
+        if self.config["wait_for_ready"]:
+            conditions.append((f"True on {self.ready_sub.resolved_name}", lambda: self.ready))
         wanted = self.config["min_subscribers"]
         if wanted > 0:
             conditions.append((f"{wanted} subscriber(s) of {self.publisher.resolved_name}",

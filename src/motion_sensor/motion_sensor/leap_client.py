@@ -16,7 +16,7 @@ from websockets.sync.client import connect
 
 from motion_common.params import Param, ParamSchema
 
-from .device import Backoff, HandDevice, empty_sample, reconnect_loop
+from .device import HAND_TYPE_PARAM, Backoff, HandDevice, empty_sample, hand_preference, reconnect_loop
 from .errors import DeviceUnavailable, MotionSensorError
 from .leap_v6 import LeapFrame, frame_to_sample, parse_message
 
@@ -173,13 +173,14 @@ class LeapDevice(HandDevice):
         Param("host", "127.0.0.1", doc="Leap service host"),
         Param("port", 6437, low=1, high=65535, doc="Leap service port"),
         Param("primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"),
+        HAND_TYPE_PARAM,
         Param("open_timeout_s", 2.0, unit="s", low=0, low_open=True, doc="connect and handshake timeout"),
         Param("frame_timeout_s", 2.0, unit="s", low=0, low_open=True, doc="silence that counts as a lost connection"),
     ])
 
     def __init__(self, config, **kw):
         super().__init__(config, **kw)
-        self.primary = self.config["primary_hand"]
+        self.primary, self.strict = hand_preference(self.config)
         self.client = LeapClient(self.config["host"], self.config["port"], on_problem=lambda text: self.warn(text),
                                  clock=self.clock, open_timeout=self.config["open_timeout_s"],
                                  frame_timeout=self.config["frame_timeout_s"])
@@ -198,7 +199,7 @@ class LeapDevice(HandDevice):
             return None
         frame, received = got
         stamp = self.mapper.to_local(frame.timestamp, received)
-        sample = frame_to_sample(frame, stamp, self.primary, self.frame_id)
+        sample = frame_to_sample(frame, stamp, self.primary, self.frame_id, self.strict)
         return empty_sample(stamp, self.frame_id, "leap") if sample is None else sample
 
     def close(self) -> None:

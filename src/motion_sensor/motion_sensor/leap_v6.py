@@ -170,10 +170,12 @@ def parse_message(text, max_bytes: int = MAX_MESSAGE_BYTES) -> Optional[LeapFram
     return LeapFrame(frame_id, timestamp * 1e-6, parsed)
 
 
-def select_primary(frame: LeapFrame, preference: str = "right") -> Optional[LeapHand]:
+def select_primary(frame: LeapFrame, preference: str = "right", strict: bool = False) -> Optional[LeapHand]:
     """Pick the primary hand: the preferred type if present, else the first hand.
 
-    ``preference`` is "right", "left" or "first" (device order).
+    ``preference`` is "right", "left" or "first" (device order). With ``strict`` only the
+    preferred type is ever picked (None without it): each arm of a bimanual session
+    follows its own hand and never falls over to the other one.
     """
     if preference not in ("right", "left", "first"):
         raise MotionSensorError(f"primary hand preference must be right, left or first, not {preference!r}")
@@ -183,16 +185,18 @@ def select_primary(frame: LeapFrame, preference: str = "right") -> Optional[Leap
         for hand in frame.hands:
             if hand.hand_type == preference:
                 return hand
+        if strict:
+            return None
     return frame.hands[0]
 
 
 def frame_to_sample(frame: LeapFrame, stamp: float, preference: str = "right",
-                    frame_id: str = "leap") -> Optional[HandSample]:
+                    frame_id: str = "leap", strict: bool = False) -> Optional[HandSample]:
     """Build the HandSample of a frame's primary hand, or None when no hand is seen.
 
     The primary hand is listed first in ``hand_types`` so consumers can read its type.
     """
-    primary = select_primary(frame, preference)
+    primary = select_primary(frame, preference, strict)
     if primary is None:
         return None
     others = [h.hand_type for h in frame.hands if h is not primary]

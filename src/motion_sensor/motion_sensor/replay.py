@@ -5,7 +5,7 @@ from typing import Iterable, Iterator, Tuple
 
 from motion_common.params import Param, ParamSchema
 
-from .device import HandDevice, empty_sample
+from .device import HAND_TYPE_PARAM, HandDevice, empty_sample, hand_preference
 from .errors import EndOfStream, MotionSensorError
 
 
@@ -67,10 +67,11 @@ def read_csv(path: str):
     return samples, rejected
 
 
-def load_samples(path: str, primary: str = "right", frame_id: str = "leap"):
+def load_samples(path: str, primary: str = "right", frame_id: str = "leap", strict: bool = False):
     """([(recorded time s, HandSample)], rejected lines) of a Leap v6 recording (.jsonl,
     .jsonl.gz), a rosbag of motion_sensor/hand (.bag) or a CSV (.csv). Frames without a hand
-    are kept (hands_num 0). Raises MotionSensorError for a file that cannot be used."""
+    are kept (hands_num 0); with ``strict`` a Leap frame without the ``primary`` hand type
+    counts as one without a hand. Raises MotionSensorError for a file that cannot be used."""
     if path.endswith(".bag"):
         import rosbag
 
@@ -103,7 +104,7 @@ def load_samples(path: str, primary: str = "right", frame_id: str = "leap"):
         raise MotionSensorError(f"recording {path} holds no usable frame ({len(recording.rejected)} rejected)")
     samples = []
     for frame in recording.frames:
-        sample = frame_to_sample(frame, stamp=frame.timestamp, preference=primary, frame_id=frame_id)
+        sample = frame_to_sample(frame, stamp=frame.timestamp, preference=primary, frame_id=frame_id, strict=strict)
         samples.append((frame.timestamp, empty_sample(frame.timestamp, frame_id, "leap") if sample is None else sample))
     return samples, recording.rejected
 
@@ -129,6 +130,7 @@ class ReplayDevice(HandDevice):
               doc="pause between passes; at least the sequencer's hand_lost_s, so each pass is a new entry"),
         Param("start_offset", 0.0, unit="s", low=0, doc="seconds into the recording to start from"),
         Param("primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"),
+        HAND_TYPE_PARAM,
     ])
 
     def __init__(self, config, **kw):
@@ -136,8 +138,8 @@ class ReplayDevice(HandDevice):
         if not self.config["recording"]:
             raise MotionSensorError("parameter 'recording' must name the file to replay")
         # Loaded now, so a missing or unusable file stops the node before it waits for anyone.
-        self.samples, self._rejected = load_samples(self.config["recording"], self.config["primary_hand"],
-                                                    self.frame_id)
+        preference, strict = hand_preference(self.config)
+        self.samples, self._rejected = load_samples(self.config["recording"], preference, self.frame_id, strict)
         self.counters["rejected"] += len(self._rejected)
         self._schedule = None
         self._start = None

@@ -25,6 +25,7 @@ import numpy as np
 
 from .errors import MotionSensorError
 from motion_common.float_list import float_list
+from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema
 from motion_common.rotations import is_unit_quaternion, multiply_quaternions, quaternion_norm
 
@@ -33,39 +34,6 @@ from .hand_sample import HandSample
 
 # Drops that are the sequencer doing its job, not bad input: counted, never warned about.
 EXPECTED_DROPS = frozenset({"entry_trim", "exit_trim", "no_hand", "inactive_device"})
-
-
-@dataclass
-class SequencerConfig:
-    """Sequencer parameters (units in the names)."""
-
-    filter_name: str = "mean"
-    filter_params: dict = None
-    max_age_s: float = 0.25
-    max_future_s: float = 0.05
-    entry_trim_frames: int = 10
-    exit_trim_frames: int = 0
-    hand_lost_s: float = 0.2
-    jump_distance_m: float = 0.05
-    jump_angle_rad: float = 0.8
-    jump_window_s: float = 0.05
-    jump_accept_after: int = 5
-    device_timeout_s: float = 0.3
-    device_priorities: Dict[str, int] = field(default_factory=dict)
-    active_device: str = ""
-
-    def __post_init__(self):
-        if self.filter_params is None:
-            self.filter_params = {"queue_size": 10} if self.filter_name == "mean" else {}
-        for name in ("max_age_s", "hand_lost_s", "jump_distance_m", "jump_angle_rad", "jump_window_s",
-                     "device_timeout_s"):
-            if not getattr(self, name) > 0:
-                raise MotionSensorError(f"{name} must be > 0, got {getattr(self, name)!r}")
-        for name in ("max_future_s", "entry_trim_frames", "exit_trim_frames"):
-            if not getattr(self, name) >= 0:
-                raise MotionSensorError(f"{name} must be >= 0, got {getattr(self, name)!r}")
-        if self.jump_accept_after < 1:
-            raise MotionSensorError("jump_accept_after must be >= 1 frame")
 
 
 INPUT_PARAMS = ParamSchema([
@@ -95,6 +63,37 @@ SEQUENCER_PARAMS = ParamSchema([
     Param("inputs", None, kind=list, item_kind=dict, nullable=True,
           doc="[{topic, device, priority}] per device; unset = one input ~input named default"),
 ])
+
+
+@dataclass
+class SequencerConfig:
+    """The stages' parameters; defaults, units and ranges are ``SEQUENCER_PARAMS`` (the
+    node's declaration), and a value out of range raises MotionSensorError."""
+
+    filter_name: str = SEQUENCER_PARAMS.field("filter")
+    filter_params: dict = None
+    max_age_s: float = SEQUENCER_PARAMS.field("max_age_s")
+    max_future_s: float = SEQUENCER_PARAMS.field("max_future_s")
+    entry_trim_frames: int = SEQUENCER_PARAMS.field("entry_trim_frames")
+    exit_trim_frames: int = SEQUENCER_PARAMS.field("exit_trim_frames")
+    hand_lost_s: float = SEQUENCER_PARAMS.field("hand_lost_s")
+    jump_distance_m: float = SEQUENCER_PARAMS.field("jump_distance_m")
+    jump_angle_rad: float = SEQUENCER_PARAMS.field("jump_angle_rad")
+    jump_window_s: float = SEQUENCER_PARAMS.field("jump_window_s")
+    jump_accept_after: int = SEQUENCER_PARAMS.field("jump_accept_after")
+    device_timeout_s: float = SEQUENCER_PARAMS.field("device_timeout_s")
+    device_priorities: Dict[str, int] = field(default_factory=dict)
+    active_device: str = SEQUENCER_PARAMS.field("active_device")
+
+    def __post_init__(self):
+        try:
+            # filter_params here is one filter's mapping, checked by that filter's constructor.
+            SEQUENCER_PARAMS.check_fields(self, "SequencerConfig", names={"filter_name": "filter",
+                                                                          "filter_params": ""})
+        except ParameterError as exc:
+            raise MotionSensorError(str(exc)) from None
+        if self.filter_params is None:
+            self.filter_params = filter_params_for(SEQUENCER_PARAMS.defaults(), self.filter_name)
 
 
 def filter_params_for(params: dict, name: str) -> dict:

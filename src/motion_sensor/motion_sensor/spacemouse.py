@@ -350,7 +350,7 @@ class SpaceMouseDevice(HandDevice):
 
     name = "spacemouse"
     default_frame_id = "spacemouse"
-    bool_outputs = {"engage": "/motion_commander/engage"}
+    bool_outputs = {"engage": "motion_commander/engage"}
     params = ParamSchema([
         Param("rate_hz", 100.0, unit="Hz", low=0, low_open=True, high=1000, doc="virtual hand poses per second"),
         Param("full_scale_counts", 350.0, unit="counts", low=0, low_open=True, doc="HID counts at the cap's end stop"),

@@ -1,0 +1,60 @@
+"""The ROS edge of ``motion_common.interface``: publishers, subscribers, services and
+parameters made from a node's one declaration.
+
+A node asks for ``publisher(NODE, "joint_states", queue_size=10)``: the name, the message
+type and the latch come from the declaration, so a node can neither use a name it does not
+declare nor disagree with the docs about a type. Names stay relative; the launch file's
+namespace and remaps place them.
+"""
+import roslib.message
+import rospy
+
+from .interface import NodeInterface
+from .ros_params import load_private_params
+
+__all__ = ["load_params", "publisher", "subscriber", "service", "service_proxy", "message_class"]
+
+
+def message_class(type_name: str):
+    """The generated Python class of ``pkg/Msg``; a clear error if its package is not built."""
+    cls = roslib.message.get_message_class(type_name)
+    if cls is None:
+        raise ImportError(f"message type {type_name!r} not found (is its package built and sourced?)")
+    return cls
+
+
+def _service_class(type_name: str):
+    cls = roslib.message.get_service_class(type_name)
+    if cls is None:
+        raise ImportError(f"service type {type_name!r} not found (is its package built and sourced?)")
+    return cls
+
+
+def load_params(node: NodeInterface) -> dict:
+    """The node's checked private parameters (a bad or unknown key: fatal log and exit 1)."""
+    return load_private_params(node.params, node.node)
+
+
+def publisher(node: NodeInterface, name: str, queue_size=10, **kwargs) -> rospy.Publisher:
+    """A publisher of the declared topic ``name`` (type and latch from the declaration)."""
+    topic = node.published(name)
+    return rospy.Publisher(topic.name, message_class(topic.type), queue_size=queue_size,
+                           latch=topic.latched, **kwargs)
+
+
+def subscriber(node: NodeInterface, name: str, callback, queue_size=10, **kwargs) -> rospy.Subscriber:
+    """A subscriber of the declared topic ``name``."""
+    topic = node.subscribed(name)
+    return rospy.Subscriber(topic.name, message_class(topic.type), callback, queue_size=queue_size, **kwargs)
+
+
+def service(node: NodeInterface, name: str, handler) -> rospy.Service:
+    """The declared service ``name``, served by ``handler``."""
+    entry = node.served(name)
+    return rospy.Service(entry.name, _service_class(entry.type), handler)
+
+
+def service_proxy(node: NodeInterface, name: str, **kwargs) -> rospy.ServiceProxy:
+    """A proxy of the declared called service ``name``."""
+    entry = node.called(name)
+    return rospy.ServiceProxy(entry.name, _service_class(entry.type), **kwargs)
