@@ -3,6 +3,8 @@
 
 Its modules, by role:
 
+- ``interfaces``: the one declaration of each of this package's nodes (parameters, topics,
+  services; see ``motion_common.interface``), from which docs/interfaces.md is generated;
 - state and readings (plain Python, unit-tested): ``state`` (``DashboardState``: ROS
   callbacks write it, the page reads snapshots), ``path_buffer`` (the hand and tool
   paths), ``readings`` (message contents as the page shows them), ``status_style`` (the

@@ -3,6 +3,8 @@ and the command dispatcher behind motion_controller_server.
 
 Its modules, by role:
 
+- ``interfaces``: the one declaration of each of this package's nodes (parameters, topics,
+  services; see ``motion_common.interface``), from which docs/interfaces.md is generated;
 - the driver contract: ``robot_hw`` (``RobotDriver``, the template every driver
   implements: the paper's API plus what real controllers need), ``registry`` (drivers by
   name: the built-ins and any package's ``hw_interface.drivers`` entry point);

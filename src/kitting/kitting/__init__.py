@@ -2,6 +2,8 @@
 
 Its modules, by role:
 
+- ``interfaces``: the one declaration of each of this package's nodes (parameters, topics,
+  services; see ``motion_common.interface``), from which docs/interfaces.md is generated;
 - the cell as data: ``parts`` (the six part classes), ``cell`` (robot, belt, tray,
   markers and camera from ``config/cell.yaml``), ``meshes`` (the parts' render meshes);
 - simulation: ``sim_scene`` (the cell in pybullet), ``cell_sim`` (its physics around the

@@ -3,6 +3,8 @@
 Its modules, by role (the program file format itself is ``motion_commander.program``,
 shared with the kitting application):
 
+- ``interfaces``: the one declaration of each of this package's nodes (parameters, topics,
+  services; see ``motion_common.interface``), from which docs/interfaces.md is generated;
 - ``teach``: the teach-mode state machine, fed with gesture events and tool poses, and
   its gesture configuration;
 - ``program_check``: reachability, workspace fence and collision check of every waypoint

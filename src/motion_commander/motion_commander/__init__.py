@@ -3,6 +3,8 @@ manipulation API, and the taught-program file format.
 
 Its modules, by role (the robot model itself is ``motion_common.kinematics``):
 
+- ``interfaces``: the one declaration of each of this package's nodes (parameters, topics,
+  services; see ``motion_common.interface``), from which docs/interfaces.md is generated;
 - teleoperation: ``teleop`` (hand motion since the clutch engaged, scaled, becomes a tool
   target; the clutches), ``safety`` (joint speed and acceleration limits, joint limit
   margin, singularity guard, workspace fence, engage ramp, stale-command watchdog, after

@@ -4,6 +4,10 @@ It holds what more than one layer needs and none of them owns, and imports none 
 framework's packages, so every other package may import it without breaking the one-way
 layering. Its modules, by role:
 
+- node interfaces: ``interface`` (``NodeInterface``: the one declaration of a node's
+  parameters, topics and services, relative names) and ``ros_interface`` (publishers,
+  subscribers and services made from it: a ROS edge);
+- ``camera_model``: pinhole camera intrinsics and their CameraInfo conversion;
 - robot model: ``kinematics`` (URDF loading with pinocchio, forward/inverse kinematics,
   Jacobians, joint limits; the shipped URDFs are in ``urdf/``, start poses in
   ``config/robots/``);
@@ -21,6 +25,7 @@ The names in ``__all__`` are imported from their module on first use, so ``impor
 motion_common`` loads neither pinocchio nor rospy. ``float_list`` is not among them: the
 function shares its module's name, so use ``motion_common.float_list.float_list``.
 """
+
 from importlib import import_module as _import_module
 
 # Public name -> the submodule that defines it.

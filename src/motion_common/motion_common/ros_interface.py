@@ -6,6 +6,8 @@ type and the latch come from the declaration, so a node can neither use a name i
 declare nor disagree with the docs about a type. Names stay relative; the launch file's
 namespace and remaps place them.
 """
+from __future__ import annotations
+
 import roslib.message
 import rospy
 

@@ -3,6 +3,10 @@ registration and gesture recognition of hand frames.
 
 Its modules, by role:
 
+- ``interfaces``: the one declaration of each of this package's nodes (parameters, topics,
+  services; see ``motion_common.interface``), from which docs/interfaces.md is generated;
+- ``device_interface``: what every device node shares (wrapper parameters and topics)
+  merged with a device class's own parameters into that node's declaration;
 - the hand frame: ``hand_sample`` (``HandSample``, the ROS-free form of a
   ``motion_sensor/hand`` message), ``errors``;
 - devices (plain Python: each is a ``HandDevice`` a node wrapper runs): ``device`` (the

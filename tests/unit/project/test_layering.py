@@ -31,9 +31,20 @@ ALLOWED = {
 APPLICATIONS = {"motion_apps", "kitting", "dashboard"}
 
 
+# Packages with no Python at all (launch files only), so no layer to keep.
+NO_PYTHON = {"motion_bringup"}
+
+
 def framework_packages():
-    """Every catkin package under src/ (a folder with a package.xml)."""
-    return sorted(name for name in os.listdir(SRC) if os.path.isfile(os.path.join(SRC, name, "package.xml")))
+    """Every catkin package under src/ (a folder with a package.xml) that holds Python."""
+    return sorted(name for name in os.listdir(SRC) if os.path.isfile(os.path.join(SRC, name, "package.xml"))
+                  and name not in NO_PYTHON)
+
+
+def test_bringup_holds_no_python():
+    for package in NO_PYTHON:
+        for folder, _, files in os.walk(os.path.join(SRC, package)):
+            assert not [f for f in files if f.endswith(".py")], f"{package} is launch files only"
 
 
 def python_files(package):
