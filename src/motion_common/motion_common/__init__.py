@@ -13,7 +13,7 @@ layering. Its modules, by role:
   ``config/robots/``);
 - parameters: ``params`` (``ParamSchema``, the one validator every node's parameters go
   through) and ``ros_params`` (reads a node's private parameters from the parameter
-  server through a schema: the package's only rospy import);
+  server through a schema; like ``ros_interface``, a ROS edge that imports rospy);
 - geometry: ``rotations`` (quaternions x, y, z, w and rotation matrices in plain numpy: the
   unit-quaternion check, matrix to quaternion, the Hamilton product);
 - per-frame and file helpers: ``float_list`` (small vectors as plain floats on the
