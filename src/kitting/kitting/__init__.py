@@ -7,8 +7,8 @@ Its modules, by role:
 - the cell as data: ``parts`` (the six part classes), ``cell`` (robot, belt, tray,
   markers and camera from ``config/cell.yaml``), ``meshes`` (the parts' render meshes);
 - simulation: ``sim_scene`` (the cell in pybullet), ``cell_sim`` (its physics around the
-  simulated arm), ``camera`` (pinhole model and pybullet rendering), ``render_worker``
-  (rendering in a process of its own);
+  simulated arm), ``camera`` (pybullet rendering of the pinhole camera of
+  ``motion_common.camera_model``), ``render_worker`` (rendering in a process of its own);
 - camera input: ``frame_source`` (webcam, video file, image folder), ``image_msgs``
   (``sensor_msgs`` image and camera info conversions without cv_bridge),
   ``intrinsics_file``, ``calibration`` (ChArUco intrinsics, marker extrinsics),
@@ -41,7 +41,6 @@ _PUBLIC = {
     "SimScene": "sim_scene",
     "render_board_views": "sim_scene",
     "CellSimulation": "cell_sim",
-    "PinholeCamera": "camera",
     "Lighting": "camera",
     "render": "camera",
     "RenderWorker": "render_worker",
@@ -59,7 +58,7 @@ _PUBLIC = {
     "load_camera_info_yaml": "intrinsics_file",
     "resolve_camera_info_url": "intrinsics_file",
     "BoardSpec": "calibration",
-    "Intrinsics": "calibration",
+    "CalibrationResult": "calibration",
     "Extrinsics": "calibration",
     "calibrate_intrinsics": "calibration",
     "write_intrinsics_yaml": "calibration",

@@ -2,7 +2,8 @@
 
 Intrinsics: ``calibrate_intrinsics`` takes images of a ChArUco board, finds its corners
 with ``cv2.aruco.CharucoDetector.detectBoard``, pairs them with the board's 3-D corners
-(``CharucoBoard.matchImagePoints``) and runs ``cv2.calibrateCamera``; the result carries the
+(``CharucoBoard.matchImagePoints``) and runs ``cv2.calibrateCamera``; the result
+(``CalibrationResult``) carries the camera (``motion_common.camera_model.Intrinsics``), the
 RMS reprojection error (px) and the per-view errors. ``write_intrinsics_yaml`` writes a
 ROS camera_info-style YAML.
 
@@ -19,6 +20,8 @@ from typing import List, Optional, Sequence, Tuple
 
 import cv2
 import numpy as np
+
+from motion_common.camera_model import Intrinsics as CameraIntrinsics
 
 from .cell import Marker
 
@@ -51,22 +54,44 @@ class BoardSpec:
 
 
 @dataclass
-class Intrinsics:
-    K: np.ndarray
-    distortion: np.ndarray
-    image_size: Tuple[int, int]            # (width, height) px
-    rms: float                             # px, overall RMS reprojection error
+class CalibrationResult:
+    """What ``calibrate_intrinsics`` measured: the camera's ``intrinsics`` (the framework's
+    one pinhole model), the RMS reprojection error (px) overall and per view used, and the
+    views rejected with the reason. K, distortion, image_size, fx and fy read through to
+    the intrinsics."""
+
+    intrinsics: CameraIntrinsics
+    rms: float = float("nan")              # px, overall RMS reprojection error
     per_view_rms: List[float] = field(default_factory=list)
     views_used: int = 0
     views_rejected: List[Tuple[int, str]] = field(default_factory=list)
 
     @property
+    def K(self) -> np.ndarray:
+        return self.intrinsics.K
+
+    @property
+    def distortion(self) -> np.ndarray:
+        return np.array(self.intrinsics.distortion)
+
+    @property
+    def image_size(self) -> Tuple[int, int]:
+        return self.intrinsics.image_size
+
+    @property
     def fx(self) -> float:
-        return float(self.K[0, 0])
+        return self.intrinsics.fx
 
     @property
     def fy(self) -> float:
-        return float(self.K[1, 1])
+        return self.intrinsics.fy
+
+
+def Intrinsics(K, distortion, image_size: Tuple[int, int], rms: float = float("nan")) -> CalibrationResult:  # noqa: N802
+    """A CalibrationResult of camera matrix ``K``, ``distortion`` and ``image_size`` (width,
+    height) with RMS error ``rms``: the constructor of the calibration result under its
+    former name, for the callers written against it (nodes/kitting_cell_sim)."""
+    return CalibrationResult(CameraIntrinsics.from_matrix(K, distortion, image_size), float(rms))
 
 
 def _grey(image) -> np.ndarray:
@@ -87,7 +112,7 @@ def detect_board(image, spec: BoardSpec, min_corners: int = 8):
 
 
 def calibrate_intrinsics(images: Sequence[np.ndarray], spec: BoardSpec = BoardSpec(), flags: int = 0,
-                         min_corners: int = 8, min_views: int = 4) -> Intrinsics:
+                         min_corners: int = 8, min_views: int = 4) -> CalibrationResult:
     """Intrinsics from ChArUco board images (all of the same size). ValueError when fewer
     than ``min_views`` images show enough of the board."""
     objects, pixels, rejected, size = [], [], [], None
@@ -109,13 +134,13 @@ def calibrate_intrinsics(images: Sequence[np.ndarray], spec: BoardSpec = BoardSp
         raise ValueError(f"only {len(objects)} usable board views (need {min_views}); rejected: {rejected}")
     rms, K, dist, _, _, _, _, per_view = cv2.calibrateCameraExtended(
         objects, pixels, size, None, None, flags=flags)
-    return Intrinsics(K, dist.ravel(), size, float(rms), [float(e) for e in np.ravel(per_view)],
-                      len(objects), rejected)
+    return CalibrationResult(CameraIntrinsics.from_matrix(K, dist.ravel(), size), float(rms),
+                             [float(e) for e in np.ravel(per_view)], len(objects), rejected)
 
 
-def write_intrinsics_yaml(path: str, intrinsics: Intrinsics, camera_name: str = "kitting_camera") -> str:
-    """A ROS camera_info-style YAML (camera_calibration_parsers' format), written
-    atomically; returns the absolute path."""
+def write_intrinsics_yaml(path: str, intrinsics: CalibrationResult, camera_name: str = "kitting_camera") -> str:
+    """A ROS camera_info-style YAML (camera_calibration_parsers' format) of a calibration
+    result, written atomically; returns the absolute path."""
     import yaml
     from motion_common.atomic_file import write_atomic
     w, h = intrinsics.image_size

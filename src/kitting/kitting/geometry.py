@@ -13,7 +13,7 @@ from typing import Tuple
 
 import numpy as np
 
-from .camera import PinholeCamera
+from motion_common.camera_model import PinholeCamera
 
 
 def intersect_plane(origin, directions, plane_point, plane_normal) -> np.ndarray:

@@ -10,10 +10,12 @@ the data is the rows of the image, ``step`` bytes each. No rospy either: the mes
 - ``bgr_to_image(array, stamp, frame_id)`` -> Image (bgr8); ``array_to_image`` for rgb8 and
   mono8. A wrong array is a programming error: ValueError.
 - ``camera_info_from_intrinsics(intrinsics, stamp, frame_id)`` -> CameraInfo (R = I,
-  P = [K | 0]) from a ``kitting.calibration.Intrinsics`` (or anything with ``K``,
-  ``distortion``, ``image_size``).
+  P = [K | 0]) from a ``motion_common.camera_model.Intrinsics``, a
+  ``kitting.calibration.CalibrationResult`` (or anything with ``K``, ``distortion``,
+  ``image_size``).
 - ``intrinsics_from_camera_info(msg)`` -> (Intrinsics, "") or (None, reason): an
-  uncalibrated camera_info (K all zeros, the ROS convention) or a malformed one is refused.
+  uncalibrated camera_info (K all zeros, the ROS convention) or a malformed one is refused
+  (the checks are ``motion_common.camera_model``'s).
 
 Stamps are seconds (float), a ``genpy.Time``/``rospy.Time``, or None (zero).
 """
@@ -24,12 +26,11 @@ import genpy
 import numpy as np
 from sensor_msgs.msg import CameraInfo, Image
 
-from .calibration import Intrinsics
+from motion_common import camera_model
+from motion_common.camera_model import CameraInfoError, Intrinsics, camera_info_fields
 
 # encoding -> channels (all 8-bit).
 ENCODINGS = {"bgr8": 3, "rgb8": 3, "mono8": 1}
-# distortion model -> coefficient counts ROS tools understand.
-DISTORTION_MODELS = {"plumb_bob": (5,), "rational_polynomial": (8,)}
 
 
 def to_time(stamp) -> genpy.Time:
@@ -122,48 +123,25 @@ def bgr_to_image(array, stamp=None, frame_id: str = "") -> Image:
 
 
 def camera_info_from_intrinsics(intrinsics, stamp=None, frame_id: str = "") -> CameraInfo:
-    """CameraInfo of a monocular camera: K, D (plumb_bob for up to 5 coefficients, padded;
-    rational_polynomial for 8), R = I, P = [K | 0]."""
-    K = np.asarray(intrinsics.K, float).reshape(3, 3)
-    D = [float(v) for v in np.ravel(intrinsics.distortion)]
-    if len(D) <= 5:
-        model, D = "plumb_bob", D + [0.0] * (5 - len(D))
-    elif len(D) == 8:
-        model = "rational_polynomial"
-    else:
-        raise ValueError(f"{len(D)} distortion coefficients have no ROS distortion model (use 5 or 8)")
-    width, height = intrinsics.image_size
+    """CameraInfo of a monocular camera (``motion_common.camera_model.camera_info_fields``:
+    D plumb_bob for up to 5 coefficients, padded; rational_polynomial for 8; R = I,
+    P = [K | 0])."""
+    fields = camera_info_fields(intrinsics)
     msg = CameraInfo()
     msg.header.stamp = to_time(stamp)
     msg.header.frame_id = frame_id
-    msg.width, msg.height = int(width), int(height)
-    msg.distortion_model = model
-    msg.D = D
-    msg.K = [float(v) for v in K.ravel()]
-    msg.R = [float(v) for v in np.eye(3).ravel()]
-    msg.P = [float(v) for v in np.c_[K, np.zeros(3)].ravel()]
+    msg.width, msg.height = fields["width"], fields["height"]
+    msg.distortion_model = fields["distortion_model"]
+    msg.D, msg.K, msg.R, msg.P = fields["D"], fields["K"], fields["R"], fields["P"]
     return msg
 
 
 def intrinsics_from_camera_info(msg) -> Tuple[Optional[Intrinsics], str]:
-    """(Intrinsics with K, distortion, image size; rms nan, "") or (None, reason)."""
-    if int(msg.width) <= 0 or int(msg.height) <= 0:
-        return None, f"camera_info has no image size ({msg.width} x {msg.height})"
-    K = np.asarray(msg.K, float)
-    if K.size != 9 or not np.all(np.isfinite(K)):
-        return None, f"camera_info K must be 9 finite numbers, got {list(msg.K)}"
-    K = K.reshape(3, 3)
-    if not np.any(K):
-        return None, "camera_info is uncalibrated (K is all zeros): calibrate with calibrate_camera"
-    if K[0, 0] <= 0 or K[1, 1] <= 0 or K[2, 2] != 1.0 or K[1, 0] or K[2, 0] or K[2, 1]:
-        return None, f"camera_info K is not a camera matrix (need fx, fy > 0, last row 0 0 1): {K.ravel().tolist()}"
-    D = np.asarray(msg.D, float)
-    if not np.all(np.isfinite(D)):
-        return None, f"camera_info D holds non-finite values: {list(msg.D)}"
-    counts = DISTORTION_MODELS.get(msg.distortion_model)
-    if counts is None and (msg.distortion_model or D.size):
-        return None, (f"distortion model {msg.distortion_model!r} is not supported "
-                      f"(use one of {', '.join(DISTORTION_MODELS)})")
-    if counts is not None and D.size not in counts and not (msg.distortion_model == "plumb_bob" and D.size <= 5):
-        return None, f"{msg.distortion_model} needs {counts[0]} coefficients, got {D.size}"
-    return Intrinsics(K, D, (int(msg.width), int(msg.height)), float("nan")), ""
+    """(the camera's Intrinsics, "") or (None, reason): the checks of
+    ``motion_common.camera_model.intrinsics_from_camera_info``, for callers that log and
+    go on rather than stop."""
+    try:
+        return camera_model.intrinsics_from_camera_info(msg), ""
+    except CameraInfoError as exc:
+        hint = ": calibrate with calibrate_camera" if exc.reason == "uncalibrated" else ""
+        return None, f"{exc}{hint}"

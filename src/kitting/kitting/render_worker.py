@@ -19,7 +19,8 @@ import numpy as np
 
 def _serve(connection, cell_path, width, height, supersample):
     import pybullet as p
-    from .camera import PinholeCamera, render
+    from motion_common.camera_model import PinholeCamera
+    from .camera import render
     from .cell import load_cell
     from .sim_scene import SimScene
     client = p.connect(p.DIRECT)

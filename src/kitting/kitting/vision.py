@@ -3,7 +3,8 @@ the robot base frame with the calibrated camera (``kitting.geometry``)."""
 from dataclasses import dataclass
 from typing import Optional
 
-from .camera import PinholeCamera
+from motion_common.camera_model import PinholeCamera
+
 from .cell import Belt
 from .detector import ClassicalDetector, Detection, DetectionResult, belt_mask_for
 from .geometry import image_angle_to_belt_yaw, pixel_to_belt, pixels_to_plane

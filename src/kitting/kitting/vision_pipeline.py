@@ -22,10 +22,10 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from motion_common.camera_model import PinholeCamera
 from motion_common.params import Param, ParamSchema
 
 from .calibration import extrinsics_from_marker
-from .camera import PinholeCamera
 from .cell import Cell
 from .detector import ClassicalDetector, DetectionResult, Rejection, belt_mask_for, check_image
 from .geometry import pixels_to_plane

@@ -16,6 +16,8 @@ layering. Its modules, by role:
   server through a schema; like ``ros_interface``, a ROS edge that imports rospy);
 - geometry: ``rotations`` (quaternions x, y, z, w and rotation matrices in plain numpy: the
   unit-quaternion check, matrix to quaternion, the Hamilton product);
+- cameras: ``camera_model`` (the pinhole model: ``Intrinsics``, ``PinholeCamera``, and
+  CameraInfo to intrinsics with its checks);
 - per-frame and file helpers: ``float_list`` (small vectors as plain floats on the
   latency path), ``startup_heap`` (keeps a node's start-up heap out of the garbage
   collector's scans), ``atomic_file`` (a saved file is either the old one or the new one);
@@ -46,6 +48,11 @@ _PUBLIC = {
     "matrix_to_quaternion": "rotations",
     "multiply_quaternions": "rotations",
     "with_positive_w": "rotations",
+    "Intrinsics": "camera_model",
+    "PinholeCamera": "camera_model",
+    "CameraInfoError": "camera_model",
+    "intrinsics_from_camera_info": "camera_model",
+    "camera_info_fields": "camera_model",
     "Param": "params",
     "ParamSchema": "params",
     "read_yaml_file": "params",

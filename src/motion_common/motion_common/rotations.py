@@ -17,6 +17,7 @@ arithmetic (see ``motion_common.float_list``). ``matrix_to_quaternion`` replaces
 ``pinocchio.Quaternion(matrix)``, which allocates memory it never frees on every call, and
 gives the same numbers (the same branches and the same operations as Eigen's conversion).
 """
+
 import math
 
 import numpy as np
@@ -53,10 +54,12 @@ def multiply_quaternions(a, b) -> tuple:
     rotation b first, then a (as matrices: R(a) @ R(b)). Pass plain floats."""
     ax, ay, az, aw = a
     bx, by, bz, bw = b
-    return (aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-            aw * bw - ax * bx - ay * by - az * bz)
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )
 
 
 def matrix_to_quaternion(matrix) -> np.ndarray:
@@ -75,8 +78,7 @@ def matrix_to_quaternion(matrix) -> np.ndarray:
         root = math.sqrt(trace + 1.0)
         w = 0.5 * root
         scale = 0.5 / root
-        return np.array([(m[2][1] - m[1][2]) * scale, (m[0][2] - m[2][0]) * scale,
-                         (m[1][0] - m[0][1]) * scale, w])
+        return np.array([(m[2][1] - m[1][2]) * scale, (m[0][2] - m[2][0]) * scale, (m[1][0] - m[0][1]) * scale, w])
     i = 0
     if m[1][1] > m[0][0]:
         i = 1

@@ -4,14 +4,17 @@
 metres, the two encodings REP 118 allows for depth) into a float32 array of metres where 0
 means "no measurement" (NaN, inf, 0 and out-of-range values all become 0, so the tracker
 compares numbers only). ``intrinsics_from_camera_info`` reads the pinhole part of a
-sensor_msgs/CameraInfo. Anything unusable raises ``DepthImageError`` whose ``reason`` is a
-short key the device counts on /diagnostics (``rejected_<reason>``).
+sensor_msgs/CameraInfo (checked by ``motion_common.camera_model``). Anything unusable
+raises ``DepthImageError`` whose ``reason`` is a short key the device counts on
+/diagnostics (``rejected_<reason>``).
 """
 from typing import Sequence
 
 import numpy as np
 
-from .camera_intrinsics import Intrinsics
+from motion_common.camera_model import CameraInfoError, Intrinsics
+from motion_common.camera_model import intrinsics_from_camera_info as _intrinsics_from_camera_info
+
 from .errors import MotionSensorError
 
 #: Depths beyond this are no measurement (m): no depth camera sees further.
@@ -28,16 +31,12 @@ class DepthImageError(MotionSensorError):
 
 def intrinsics_from_camera_info(k: Sequence[float], width: int, height: int) -> Intrinsics:
     """Intrinsics from CameraInfo's row-major 3x3 ``K`` and image size; DepthImageError
-    ("invalid_camera_info") when K is not a usable pinhole matrix."""
-    k = np.asarray(k, dtype=float).ravel()
-    if k.shape != (9,) or not np.all(np.isfinite(k)):
-        raise DepthImageError("invalid_camera_info", f"camera_info K must be 9 finite numbers, got {k.tolist()}")
-    fx, fy, cx, cy = k[0], k[4], k[2], k[5]
-    if not (fx > 0 and fy > 0) or width <= 0 or height <= 0:
-        raise DepthImageError("invalid_camera_info",
-                              f"camera_info has fx={fx}, fy={fy}, size {width}x{height}: the camera driver "
-                              "publishes no calibration (all-zero K); calibrate the camera")
-    return Intrinsics(float(fx), float(fy), float(cx), float(cy), int(width), int(height))
+    ("invalid_camera_info") when they describe no usable pinhole camera."""
+    try:
+        return _intrinsics_from_camera_info({"K": k, "width": width, "height": height})
+    except CameraInfoError as exc:
+        hint = ": calibrate the camera" if exc.reason == "uncalibrated" else ""
+        raise DepthImageError("invalid_camera_info", f"{exc}{hint}") from None
 
 
 _ENCODINGS = {"16UC1": (np.uint16, 2, 0.001), "mono16": (np.uint16, 2, 0.001), "32FC1": (np.float32, 4, 1.0)}

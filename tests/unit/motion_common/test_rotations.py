@@ -1,6 +1,7 @@
 """motion_common.rotations: the one quaternion/matrix module. Its matrix-to-quaternion
 conversion replaces pinocchio's (whose matrix constructor leaks memory on every call) in the
 kinematics and the teleop core, so it must give pinocchio's numbers."""
+
 import math
 
 import numpy as np
@@ -9,8 +10,14 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from motion_common.kinematics import matrix_to_quat
-from motion_common.rotations import (UNIT_QUATERNION_TOLERANCE, is_unit_quaternion, matrix_to_quaternion,
-                                     multiply_quaternions, quaternion_norm, with_positive_w)
+from motion_common.rotations import (
+    UNIT_QUATERNION_TOLERANCE,
+    is_unit_quaternion,
+    matrix_to_quaternion,
+    multiply_quaternions,
+    quaternion_norm,
+    with_positive_w,
+)
 
 
 def edge_rotations():
