@@ -1,7 +1,7 @@
 """Which controls can act now, and why not: every rule of the page in one function.
 
-A control that cannot act is disabled and its reason is shown next to it (the issue's
-"replay while teleop is engaged" is one such rule). STOP is never disabled.
+A control that cannot act is disabled and its reason is shown next to it (refusing a
+replay while teleop is engaged is one such rule). STOP is never disabled.
 """
 from dataclasses import dataclass
 from typing import Dict, Optional

@@ -1,4 +1,4 @@
-"""Tray slot poses from a program taught by gesture (the gesture issue's program file).
+"""Tray slot poses from a program taught by gesture (the file teach mode saves, motion_commander.program).
 
 The operator teaches the slots the way the teach mode records any place: steer the arm
 over a slot and open the hand. Each ``release`` waypoint of the saved program is one taught
