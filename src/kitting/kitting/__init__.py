@@ -82,6 +82,7 @@ _PUBLIC = {
     "Intercept": "intercept",
     "KittingPicker": "picker",
     "PickAborted": "picker",
+    "PickMissed": "picker",
     "KittingEvent": "picker",
     "slots_from_program": "slot_program",
     "TaughtSlots": "slot_program",

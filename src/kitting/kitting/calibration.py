@@ -163,13 +163,15 @@ def write_intrinsics_yaml(path: str, intrinsics: CalibrationResult, camera_name:
 @dataclass
 class MarkerObservation:
     """The cell marker seen in one image: its corners (4 x 2 px, ArUco order), its pose in
-    the camera (4x4), the reprojection error (px), or a reason it is unusable."""
+    the camera (4x4), the reprojection error (px), or a reason it is unusable;
+    ``partly_outside``: it was found but reaches the image border (partly hidden)."""
 
     ok: bool
     reason: str = ""
     corners: Optional[np.ndarray] = None
     T_cam_marker: Optional[np.ndarray] = None
     reprojection_px: float = float("nan")
+    partly_outside: bool = False
 
 
 def marker_detector(dictionary: str):
@@ -195,7 +197,7 @@ def observe_marker(image, marker: Marker, K, distortion, edge_margin_px: float =
     h, w = image.shape[:2]
     if (pixels.min() < edge_margin_px or pixels[:, 0].max() > w - 1 - edge_margin_px
             or pixels[:, 1].max() > h - 1 - edge_margin_px):
-        return MarkerObservation(False, "marker partly outside the image", pixels)
+        return MarkerObservation(False, "marker partly outside the image", pixels, partly_outside=True)
     half = marker.size / 2
     objects = np.array([[-half, half, 0], [half, half, 0], [half, -half, 0], [-half, -half, 0]], np.float64)
     ok, rvec, tvec = cv2.solvePnP(objects, pixels, K, distortion, flags=cv2.SOLVEPNP_IPPE_SQUARE)
@@ -212,7 +214,8 @@ def observe_marker(image, marker: Marker, K, distortion, edge_margin_px: float =
 @dataclass
 class Extrinsics:
     """Camera pose in the base frame (or the reason there is none), the RMS reprojection
-    error of the marker corners (px), the markers used and those expected but not usable."""
+    error of the marker corners (px), the markers used, those expected but not usable (id,
+    reason), and among these the ones seen partly outside the image (``partly_hidden``)."""
 
     ok: bool
     reason: str = ""
@@ -220,6 +223,7 @@ class Extrinsics:
     reprojection_px: float = float("nan")
     used: List[int] = field(default_factory=list)
     missing: List[Tuple[int, str]] = field(default_factory=list)
+    partly_hidden: List[int] = field(default_factory=list)
 
 
 def extrinsics_from_marker(image, markers, K, distortion, require_all: bool = False) -> Extrinsics:
@@ -229,11 +233,13 @@ def extrinsics_from_marker(image, markers, K, distortion, require_all: bool = Fa
     SOLVEPNP_IPPE (coplanar points) refined by Levenberg-Marquardt. With ``require_all`` a
     missing or partly hidden marker refuses the calibration."""
     markers = [markers] if isinstance(markers, Marker) else list(markers)
-    objects, pixels, used, missing, single = [], [], [], [], None
+    objects, pixels, used, missing, hidden, single = [], [], [], [], [], None
     for marker in markers:
         observation = observe_marker(image, marker, K, distortion)
         if not observation.ok:
             missing.append((marker.id, observation.reason))
+            if observation.partly_outside:
+                hidden.append(marker.id)
             continue
         objects.append(marker.corners())
         pixels.append(observation.corners)
@@ -241,7 +247,7 @@ def extrinsics_from_marker(image, markers, K, distortion, require_all: bool = Fa
         single = (marker, observation)
     if not used or (require_all and missing):
         reason = "; ".join(f"marker {i}: {why}" for i, why in missing)
-        return Extrinsics(False, reason, missing=missing)
+        return Extrinsics(False, reason, missing=missing, partly_hidden=hidden)
     objects, pixels = np.vstack(objects), np.vstack(pixels)
     if len(used) == 1:
         marker, observation = single
@@ -249,7 +255,7 @@ def extrinsics_from_marker(image, markers, K, distortion, require_all: bool = Fa
     else:
         ok, rvec, tvec = cv2.solvePnP(objects, pixels, K, distortion, flags=cv2.SOLVEPNP_IPPE)
         if not ok:
-            return Extrinsics(False, "marker pose not solvable", missing=missing)
+            return Extrinsics(False, "marker pose not solvable", missing=missing, partly_hidden=hidden)
         rvec, tvec = cv2.solvePnPRefineLM(objects, pixels, K, distortion, rvec, tvec)
         T_cam_base = np.eye(4)
         T_cam_base[:3, :3], _ = cv2.Rodrigues(rvec)
@@ -257,7 +263,7 @@ def extrinsics_from_marker(image, markers, K, distortion, require_all: bool = Fa
     rvec, _ = cv2.Rodrigues(T_cam_base[:3, :3])
     projected, _ = cv2.projectPoints(objects, rvec, T_cam_base[:3, 3], K, distortion)
     error = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - pixels) ** 2, axis=1))))
-    return Extrinsics(True, "", np.linalg.inv(T_cam_base), error, used, missing)
+    return Extrinsics(True, "", np.linalg.inv(T_cam_base), error, used, missing, hidden)
 
 
 def pose_error(T_estimate, T_true) -> Tuple[float, float]:

@@ -133,6 +133,12 @@ class PickAborted(Exception):
         self.reason, self.result = reason, result
 
 
+class PickMissed(PickAborted):
+    """The grasp missed the part (the arm reached the hover point too late, or the part is
+    still on the belt after the lift): the pick is retried while the part is reachable, and
+    the magnet stays on meanwhile (the part may be held after all)."""
+
+
 @dataclass
 class _PartRecord:
     attempts: int = 0
@@ -235,11 +241,11 @@ class KittingPicker:
                 record.done = True
                 return self._emit(track, "failed", f"{exc.reason}; the magnet stays on: the part goes to "
                                                    "its slot once the stop is released")
-            if self.holding is None and "missed" not in exc.reason:
+            if self.holding is None and not isinstance(exc, PickMissed):
                 # Nothing held; after a suspected miss the magnet stays on instead (if
                 # the part is held after all, it is never dropped onto the belt).
                 self._release_quietly()
-            if exc.result or record.attempts >= self.params["max_attempts"] or "missed" not in exc.reason:
+            if exc.result or record.attempts >= self.params["max_attempts"] or not isinstance(exc, PickMissed):
                 record.done = exc.result == 0 or self.holding is not None
                 return self._emit(track, "failed", exc.reason)
             return self._emit(track, "missed", exc.reason)
@@ -292,7 +298,7 @@ class KittingPicker:
         grasp = np.r_[point, top + P["grasp_gap"]]
         wait = t_grasp - self.descent_time - self.clock()
         if wait < -0.5 * self.descent_time:
-            raise PickAborted("missed: the arm reached the hover point too late for this intercept")
+            raise PickMissed("missed: the arm reached the hover point too late for this intercept")
         if wait > 0:
             self.sleep(wait)
         began = self.clock()
@@ -313,7 +319,7 @@ class KittingPicker:
                 # likely on the magnet) but say so, so that a campaign counts it apart.
                 unverified = "unverified: no camera image since the lift (is the camera registered?)"
             elif self._still_on_belt(latest, track.class_name, lifted_at):
-                raise PickAborted("missed: the part is still on the belt after the lift")
+                raise PickMissed("missed: the part is still on the belt after the lift")
         self.holding = track
         self._emit(track, "picked", unverified, grasp)
         return self.place_held()

@@ -86,8 +86,7 @@ class VisionPipeline:
         found = extrinsics_from_marker(image, self.cell.markers, self.camera.K, self.camera.distortion,
                                        require_all=True)
         if not found.ok:
-            hidden = any("partly" in why for _, why in found.missing)
-            return "marker partly hidden" if hidden else "no marker"
+            return "marker partly hidden" if found.partly_hidden else "no marker"
         if found.reprojection_px > self.params["max_reprojection_px"]:
             return f"marker reprojection {found.reprojection_px:.2f} px too large"
         pose = found.T_base_cam

@@ -90,7 +90,8 @@ class DepthTopicDevice(DepthHandDevice):
         super().__init__(config, **kw)
         self.images: "queue.Queue[DepthMessage]" = queue.Queue(maxsize=2)
         self.intrinsics: Optional[Intrinsics] = None
-        self.info_problem = "no CameraInfo received yet"
+        # Why there are no intrinsics: the counter key and the message.
+        self.info_reason, self.info_problem = "no_camera_info", "no CameraInfo received yet"
 
     def describe(self) -> str:
         return "depth camera (camera/depth/image_raw)"
@@ -102,7 +103,7 @@ class DepthTopicDevice(DepthHandDevice):
             self.info_problem = ""
         except DepthImageError as exc:
             self.intrinsics = None
-            self.info_problem = str(exc)
+            self.info_reason, self.info_problem = exc.reason, str(exc)
 
     def feed_image(self, message: DepthMessage) -> None:
         """An image arrived; the newest two wait for ``read``."""
@@ -131,8 +132,7 @@ class DepthTopicDevice(DepthHandDevice):
         """The HandSample of one image message, or None when it is rejected (counted)."""
         intrinsics = self.intrinsics
         if intrinsics is None:
-            reason = "no_camera_info" if self.info_problem.startswith("no CameraInfo") else "invalid_camera_info"
-            self.reject(reason, self.info_problem + " (on camera/depth/camera_info)")
+            self.reject(self.info_reason, self.info_problem + " (on camera/depth/camera_info)")
             return None
         try:
             depth = decode_depth(message.encoding, message.width, message.height, message.step, message.data,

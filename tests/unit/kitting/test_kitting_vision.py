@@ -103,6 +103,19 @@ def test_missing_marker_is_refused(cell):
     assert not result.ok and "no marker" in result.reason
 
 
+def test_a_marker_reaching_the_image_border_is_reported_partly_hidden(cell):
+    camera = PinholeCamera.from_spec(cell.camera)
+    marker = cell.markers[0]
+    dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, marker.dictionary))
+    image = np.full((480, 640), 255, np.uint8)
+    image[3:123, 300:420] = cv2.aruco.generateImageMarker(dictionary, marker.id, 120)   # 3 px from the top
+    found = extrinsics_from_marker(image, cell.markers, camera.K, camera.distortion, require_all=True)
+    assert not found.ok and found.partly_hidden == [marker.id]
+    assert [i for i, _ in found.missing] == [m.id for m in cell.markers]   # the other one is not in view
+    blank = extrinsics_from_marker(np.full((480, 640), 255, np.uint8), cell.markers, camera.K, camera.distortion)
+    assert not blank.ok and blank.partly_hidden == []
+
+
 def test_ray_plane_is_exact_for_a_tilted_camera(cell):
     camera = PinholeCamera.from_spec(cell.camera)
     tilt = math.degrees(math.acos(-camera.pose[2, 2]))
