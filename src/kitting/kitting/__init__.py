@@ -13,7 +13,7 @@ Its modules, by role:
   (``sensor_msgs`` image and camera info conversions without cv_bridge),
   ``intrinsics_file``, ``calibration`` (ChArUco intrinsics, marker extrinsics),
   ``calibration_views`` (choosing calibration views from a stream);
-- vision: ``detector`` (classical OpenCV detector), ``onnx_detector`` (a YOLOv8 ONNX
+- vision: ``detector`` (the detectors' base and the classical OpenCV detector), ``onnx_detector`` (a YOLOv8 ONNX
   model through onnxruntime), ``geometry`` (pixel to belt plane), ``vision`` (detections
   to belt-plane poses), ``vision_pipeline`` (one image in, the parts on the belt out);
 - picking: ``tracking`` (a Kalman filter per part), ``intercept`` (where and when to meet
@@ -64,6 +64,7 @@ _PUBLIC = {
     "write_intrinsics_yaml": "calibration",
     "extrinsics_from_marker": "calibration",
     "ViewCollector": "calibration_views",
+    "PartDetector": "detector",
     "ClassicalDetector": "detector",
     "Detection": "detector",
     "DetectionResult": "detector",

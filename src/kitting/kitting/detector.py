@@ -43,7 +43,11 @@
 Each detection has a class, the pixel centroid, an image orientation (rad; the bolt's
 axis, the nut's flat direction mod 60°, 0 for a washer) and a confidence in [0, 1] from the
 colour purity and how well the shape features match.
+
+``PartDetector`` is the base of this detector and of the ONNX one (``onnx_detector``):
+the image check of step 1, the belt mask, its eroded inner region, and the records.
 """
+import abc
 import math
 from dataclasses import dataclass, field
 from typing import Callable, List, Optional, Tuple
@@ -153,27 +157,57 @@ def input_problem(image, belt_mask=None) -> str:
     return problem
 
 
-class ClassicalDetector:
-    """Colour + shape detector. ``belt_mask``: uint8 mask (255 = belt) of the image size, or
-    None for the whole image. ``to_plane(pixels N x 2) -> N x 2 metres`` on the belt plane
-    (default: ``mm_per_px`` scale)."""
+class PartDetector(abc.ABC):
+    """The part detector ``BeltVision`` runs: ``detect(image) -> DetectionResult``, the same
+    ``Detection`` / ``Rejection`` records whatever finds them (``ClassicalDetector``,
+    ``onnx_detector.OnnxDetector``).
+
+    ``belt_mask``: uint8 mask (255 = belt) of the image size, or None for the whole image;
+    the vision pipeline replaces it at each camera registration. ``detect`` checks the
+    image first (one "corrupt image" rejection for an image no detector can use, or one
+    that does not fit the mask) and hands a usable one to the subclass's ``_detect``.
+    ``belt_inner(shape, edge)`` is the belt region less an edge zone, computed once per mask.
+    """
+
+    name = "detector"
+
+    def __init__(self, belt_mask: Optional[np.ndarray] = None):
+        self.belt_mask = belt_mask
+        self._belt_inner = BeltInner()
+
+    def detect(self, image) -> DetectionResult:
+        """The parts in an RGB uint8 image (H x W x 3), and what was rejected and why."""
+        result = DetectionResult()
+        problem = input_problem(image, self.belt_mask)
+        if problem:
+            result.rejections.append(Rejection("corrupt image", detail=problem))
+            return result
+        self._detect(image, result)
+        return result
+
+    @abc.abstractmethod
+    def _detect(self, image: np.ndarray, result: DetectionResult) -> None:
+        """Add the detections and rejections of a checked image to ``result``."""
+
+    def belt_inner(self, shape, edge: int) -> np.ndarray:
+        """The belt region (the whole image of ``shape`` without a mask) less ``edge`` px."""
+        return self._belt_inner.get(self.belt_mask, shape, edge)
+
+
+class ClassicalDetector(PartDetector):
+    """Colour + shape detector (``PartDetector``). ``to_plane(pixels N x 2) -> N x 2
+    metres`` on the belt plane (default: ``mm_per_px`` scale)."""
 
     name = "classical"
 
     def __init__(self, belt_mask: Optional[np.ndarray] = None,
                  to_plane: Optional[Callable[[np.ndarray], np.ndarray]] = None,
                  mm_per_px: float = 1.0, params: Optional[dict] = None):
+        super().__init__(belt_mask)
         self.params = DETECTOR_SCHEMA.validate(params or {}, "detector")
-        self.belt_mask = belt_mask
-        self._belt_inner = BeltInner()
         self.to_plane = to_plane or (lambda px: np.asarray(px, float) * mm_per_px / 1000.0)
 
-    def detect(self, image) -> DetectionResult:
-        result = DetectionResult()
-        problem = input_problem(image, self.belt_mask)
-        if problem:
-            result.rejections.append(Rejection("corrupt image", detail=problem))
-            return result
+    def _detect(self, image, result):
         P = self.params
         h, w = image.shape[:2]
         hsv = cv2.cvtColor(image, cv2.COLOR_RGB2HSV)
@@ -185,10 +219,10 @@ class ClassicalDetector:
         mask = np.where(foreground & (region > 0), 255, 0).astype(np.uint8)
         # Edge zone: the image border and the belt region's border.
         edge = P["edge_px"] + 1
-        inner = self._belt_inner.get(self.belt_mask, (h, w), edge)
+        inner = self.belt_inner((h, w), edge)
         contours, hierarchy = cv2.findContours(mask, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
         if hierarchy is None:
-            return result
+            return
         hierarchy = hierarchy[0]
         for index, contour in enumerate(contours):
             if hierarchy[index][3] != -1:
@@ -208,7 +242,6 @@ class ClassicalDetector:
                 holes.append(contours[child])
                 child = hierarchy[child][0]
             self._classify(contour, holes, centroid, yellow, silver, result)
-        return result
 
     def _classify(self, contour, holes, centroid, yellow, silver, result):
         P = self.params

@@ -1,7 +1,7 @@
 """The pluggable learned detector: a YOLOv8 model exported to ONNX, run with onnxruntime on
-the CPU. A drop-in for ``ClassicalDetector``: ``detect(image) -> DetectionResult`` with the
-same ``Detection`` / ``Rejection`` records, so ``BeltVision(camera, belt, detector=...)``
-takes either.
+the CPU. A ``PartDetector`` like ``ClassicalDetector``: ``detect(image) -> DetectionResult``
+with the same ``Detection`` / ``Rejection`` records and the same image check, so
+``BeltVision(camera, belt, detector=...)`` takes either.
 
 What the model must be (the layout of ``yolo export format=onnx`` of a YOLOv8 detect or
 OBB model; the README's "ONNX detector: training and export" says how to make one):
@@ -61,7 +61,7 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 import cv2
 import numpy as np
 
-from .detector import BeltInner, Detection, DetectionResult, Rejection, input_problem
+from .detector import Detection, PartDetector, Rejection
 from .parts import PART_CLASSES
 
 LETTERBOX_GREY = 114
@@ -126,8 +126,9 @@ def _size(value) -> Tuple[int, int]:
     return height, width
 
 
-class OnnxDetector:
-    """A YOLOv8 ONNX model as a part detector (see the module docstring for the layout).
+class OnnxDetector(PartDetector):
+    """A YOLOv8 ONNX model as a part detector (``PartDetector``; see the module docstring for
+    the layout).
 
     ``model_path``: the .onnx file. ``class_names``: overrides the model's ``names``
     metadata. ``input_size``: int or (H, W); default the metadata's ``imgsz``, else the
@@ -152,10 +153,10 @@ class OnnxDetector:
             raise ValueError(f"report_threshold {report_threshold} must be in (0, score_threshold={score_threshold}]")
         if not 0.0 < nms_iou <= 1.0:
             raise ValueError(f"nms_iou {nms_iou} must be in (0, 1]")
+        super().__init__(belt_mask)
         self.model_path = os.path.abspath(os.path.expanduser(str(model_path)))
         self.score_threshold, self.report_threshold, self.nms_iou = score_threshold, report_threshold, nms_iou
-        self.belt_mask, self.edge_px, self.max_detections = belt_mask, int(edge_px), int(max_detections)
-        self._belt_inner = BeltInner()
+        self.edge_px, self.max_detections = int(edge_px), int(max_detections)
         self.session = self._open(threads)
         meta = self.session.get_modelmeta().custom_metadata_map or {}
         self.metadata = dict(meta)
@@ -234,12 +235,7 @@ class OnnxDetector:
         blob = np.ascontiguousarray(padded.transpose(2, 0, 1)[None], dtype=np.float32) / np.float32(255.0)
         return blob, scale, pad
 
-    def detect(self, image) -> DetectionResult:
-        result = DetectionResult()
-        problem = input_problem(image, self.belt_mask)
-        if problem:
-            result.rejections.append(Rejection("corrupt image", detail=problem))
-            return result
+    def _detect(self, image, result):
         h, w = image.shape[:2]
         blob, (sx, sy), (left, top) = self.preprocess(image)
         output = self.session.run([self.output_name], {self.input_name: blob})[0]
@@ -255,7 +251,7 @@ class OnnxDetector:
         scores = scores_all[np.arange(len(rows)), classes]
         keep = np.flatnonzero(scores >= self.report_threshold)
         if keep.size == 0:
-            return result
+            return
         keep = keep[np.argsort(-scores[keep], kind="stable")][:30000]
         boxes = rows[keep, :4].astype(float)
         angles = rows[keep, 4 + nc].astype(float) if self.task == "obb" else np.zeros(len(keep))
@@ -263,7 +259,6 @@ class OnnxDetector:
         for i in chosen[:self.max_detections]:
             self._judge(boxes[i], angles[i], int(classes[keep[i]]), float(scores[keep[i]]),
                         (sx, sy), (left, top), (h, w), result)
-        return result
 
     def _nms(self, boxes, angles, scores) -> List[int]:
         score_list = [float(s) for s in scores]
@@ -323,7 +318,7 @@ class OnnxDetector:
         if c0 < margin + 1 or r0 < margin + 1 or c1 > w - margin - 2 or r1 > h - margin - 2:
             return "edge"
         if self.belt_mask is not None:
-            inner = self._belt_inner.get(self.belt_mask, self.belt_mask.shape, margin + 1)
+            inner = self.belt_inner(self.belt_mask.shape, margin + 1)
             if not inner[r0:r1 + 1, c0:c1 + 1].all():
                 return "edge"
         return "ok"

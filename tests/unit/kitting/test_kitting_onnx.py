@@ -237,6 +237,15 @@ def test_rejects_corrupt_images(model):
     assert result.corrupt and "belt mask" in result.rejections[0].detail
 
 
+def test_both_detectors_are_part_detectors_with_one_image_check(model):
+    from kitting.detector import ClassicalDetector, PartDetector
+    classical, learned = ClassicalDetector(), OnnxDetector(model)
+    assert isinstance(classical, PartDetector) and isinstance(learned, PartDetector)
+    for bad in (None, np.zeros((240, 320), np.float32), np.zeros((240, 320, 3), np.uint8)):
+        assert classical.detect(bad).rejections == learned.detect(bad).rejections
+        assert classical.detect(bad).corrupt
+
+
 def test_low_scores_are_rejected_with_the_reason(model, belt_scene, cell, camera):
     image, _ = belt_scene
     detector = OnnxDetector(model, belt_mask=belt_mask_for(camera, cell.belt), score_threshold=0.95)
