@@ -9,7 +9,8 @@ Its modules, by role:
 - simulation: ``sim_scene`` (the cell in pybullet), ``cell_sim`` (its physics around the
   simulated arm), ``camera`` (pybullet rendering of the pinhole camera of
   ``motion_common.camera_model``), ``render_worker`` (rendering in a process of its own);
-- camera input: ``frame_source`` (webcam, video file, image folder), ``image_msgs``
+- camera input: ``frame_source`` (webcam, video file, image folder: the frame sources of
+  ``motion_common.video_capture``, a lost camera reopened with backoff), ``image_msgs``
   (``sensor_msgs`` image and camera info conversions without cv_bridge),
   ``intrinsics_file``, ``calibration`` (ChArUco intrinsics, marker extrinsics),
   ``calibration_views`` (choosing calibration views from a stream);

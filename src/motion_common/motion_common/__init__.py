@@ -7,7 +7,6 @@ layering. Its modules, by role:
 - node interfaces: ``interface`` (``NodeInterface``: the one declaration of a node's
   parameters, topics and services, relative names) and ``ros_interface`` (publishers,
   subscribers and services made from it: a ROS edge);
-- ``camera_model``: pinhole camera intrinsics and their CameraInfo conversion;
 - robot model: ``kinematics`` (URDF loading with pinocchio, forward/inverse kinematics,
   Jacobians, joint limits; the shipped URDFs are in ``urdf/``, start poses in
   ``config/robots/``);
@@ -17,7 +16,8 @@ layering. Its modules, by role:
 - geometry: ``rotations`` (quaternions x, y, z, w and rotation matrices in plain numpy: the
   unit-quaternion check, matrix to quaternion, the Hamilton product);
 - cameras: ``camera_model`` (the pinhole model: ``Intrinsics``, ``PinholeCamera``, and
-  CameraInfo to intrinsics with its checks);
+  CameraInfo to intrinsics with its checks), ``video_capture`` (frames from OpenCV: a camera,
+  a video file or an image folder, paced and stamped, with one set of counters);
 - per-frame and file helpers: ``float_list`` (small vectors as plain floats on the
   latency path), ``startup_heap`` (keeps a node's start-up heap out of the garbage
   collector's scans), ``atomic_file`` (a saved file is either the old one or the new one);
@@ -53,6 +53,13 @@ _PUBLIC = {
     "CameraInfoError": "camera_model",
     "intrinsics_from_camera_info": "camera_model",
     "camera_info_fields": "camera_model",
+    "Frame": "video_capture",
+    "FrameSource": "video_capture",
+    "FrameSourceError": "video_capture",
+    "DeviceSource": "video_capture",
+    "VideoSource": "video_capture",
+    "ImageFolderSource": "video_capture",
+    "open_source": "video_capture",
     "Param": "params",
     "ParamSchema": "params",
     "read_yaml_file": "params",

@@ -1,17 +1,23 @@
 """A webcam (or a video file) with MediaPipe Hands as a HandDevice (nodes/webcam_hand_driver).
 
+The frames come from ``motion_common.video_capture`` (its counters join the device's on
+/diagnostics, with the same names as every frame source's):
+
 - ``camera`` >= 0 opens that OpenCV VideoCapture device and streams in tracking mode; a
-  camera that cannot be opened or stops delivering is reopened with backoff. Each message
-  carries the time its frame was grabbed.
+  camera that cannot be opened or stops delivering is reopened with backoff (by the device
+  runner). Each message carries the time its frame was grabbed.
 - ``video`` = FILE plays the file once at its own frame rate, one message per frame, each
-  stamped with its frame's time in the file mapped onto the clock; at the end it raises
-  EndOfStream, so the node reports ~finished and exits, as the replay does.
+  stamped with its frame's time in the file mapped onto the clock (a reader more than a
+  frame late plays on from now: ``late_frames``); at the end it raises EndOfStream, so the
+  node reports ~finished and exits, as the replay does.
 
 Frames that fail to decode are counted (``decode_failures``) and skipped. Frames that
 decode but show nothing usable (black, saturated, no hand) go out as hands_num 0 (see
 ``motion_sensor.webcam_hand``).
 """
+import functools
 import os
+from collections import Counter
 from typing import Callable, Optional
 
 import numpy as np
@@ -96,11 +102,8 @@ class WebcamHandDevice(HandDevice):
             limits=FrameLimits(black_level=cfg["black_level"], saturated_fraction=cfg["saturated_fraction"]),
             mirrored=cfg["mirrored"])
         self.tracker.counters = self.counters  # one set of counters on /diagnostics
-        self._capture = None
-        self._fps = 0.0
-        self._frame_count = 0
-        self._index = 0          # frames grabbed from the video
-        self._origin = None      # clock time of the video's frame 0
+        self._source = None      # the camera or video, kept across reconnects
+        self._synced: Counter = Counter()   # its counters already added to ours
 
     def _intrinsics(self) -> Optional[Intrinsics]:
         cfg = self.config
@@ -113,85 +116,65 @@ class WebcamHandDevice(HandDevice):
     def describe(self) -> str:
         return f"webcam video {self.config['video']}" if self.config["video"] else f"webcam {self.config['camera']}"
 
-    def _new_capture(self, source):
-        if self._capture_factory is not None:
-            return self._capture_factory(source)
-        import cv2
-
-        return cv2.VideoCapture(source)
-
     def open(self) -> None:
-        import cv2
-
         if self.tracker.detector is None:  # built once, kept across reconnects (loading takes ~0.5 s)
             self.tracker.detector = self._detector_factory(self.config)
             # The first inference initialises the graph (~0.5 s): do it now, so that the
             # first real frame is not late (the sequencer would drop it as stale).
             self.tracker.detector.detect(np.zeros((480, 640, 3), np.uint8))
-        video = self.config["video"]
-        capture = self._new_capture(video if video else self.config["camera"])
-        if not capture.isOpened():
-            capture.release()
-            if video:  # a file that OpenCV cannot read will not heal: stop the node
-                raise MotionSensorError(f"OpenCV cannot open video {video} (not a video, or an unsupported codec)")
-            raise DeviceUnavailable(f"cannot open camera {self.config['camera']} (unplugged, or busy?)")
-        if video:
-            self._fps = float(capture.get(cv2.CAP_PROP_FPS) or 0.0)
-            if not self._fps > 0:
-                capture.release()
-                raise MotionSensorError(f"video {video} has no frame rate; re-encode it (e.g. ffmpeg -r 30)")
-            self._frame_count = int(capture.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
-            if self._index == 0:
-                self.info(f"playing {video}: {self._frame_count} frames at {self._fps:.2f} fps")
-        else:
-            for prop, key in ((cv2.CAP_PROP_FRAME_WIDTH, "width"), (cv2.CAP_PROP_FRAME_HEIGHT, "height"),
-                              (cv2.CAP_PROP_FPS, "fps")):
-                if self.config[key] > 0:
-                    capture.set(prop, self.config[key])
-        self._capture = capture
+        if self._source is None:
+            self._source = self._new_source()
+        if not self.config["video"]:
+            why = self._source.open()
+            self._sync_counters()
+            if why:
+                raise DeviceUnavailable(why)
 
-    def _next_video_frame(self):
-        """(decoded frame or None, stamp) of the video's next frame at its due time; raises
-        EndOfStream after the last one."""
-        if not self._capture.grab():
-            if self._frame_count and self._index < self._frame_count:
-                self.counters["decode_failures"] += self._frame_count - self._index
-                self.warn(f"video ended after {self._index} of {self._frame_count} frames")
-            raise EndOfStream()
-        period = 1.0 / self._fps
-        if self._origin is None:
-            self._origin = self.clock()
-        due = self._origin + self._index * period
-        self._index += 1
-        delay = due - self.clock()
-        if delay > 0:
-            self.sleep(delay)
-        elif delay < -period:  # fell behind (a stall): play on from now rather than burst
-            self.counters["late_frames"] += 1
-            self._origin -= delay
-            due -= delay
-        ok, frame = self._capture.retrieve()
-        return (frame if ok else None), due
+    def _new_source(self):
+        """The frame source (motion_common.video_capture) of the camera or the video file."""
+        import cv2
+
+        from motion_common import video_capture
+
+        cfg = self.config
+        if cfg["video"]:
+            try:
+                source = video_capture.VideoSource(cfg["video"], fallback_fps=None, clock=self.clock,
+                                                   sleep=self.sleep,
+                                                   open_capture=self._capture_factory or cv2.VideoCapture)
+            except video_capture.FrameSourceError as exc:  # a file OpenCV cannot play will not heal: stop
+                raise MotionSensorError(str(exc)) from None
+            self.info(f"playing {cfg['video']}: {source.frame_count} frames at {source.fps:.2f} fps")
+            return source
+        # One failed grab and the camera counts as lost: the device runner closes it and
+        # opens it again with its backoff.
+        return video_capture.DeviceSource(
+            cfg["camera"], cfg["width"], cfg["height"], cfg["fps"], max_failures=1, clock=self.clock,
+            sleep=self.sleep, open_capture=functools.partial(video_capture.open_camera, factory=self._capture_factory))
+
+    def _sync_counters(self) -> None:
+        """Add what the frame source counted since the last call to the device's counters,
+        except its ``frames``: the tracker counts every frame it is given."""
+        for key, value in self._source.counters.items():
+            if key != "frames" and value != self._synced[key]:
+                self.counters[key] += value - self._synced[key]
+                self._synced[key] = value
 
     def read(self, now: float) -> Optional[HandSample]:
-        if self.config["video"]:
-            frame, stamp = self._next_video_frame()
-        else:
-            if not self._capture.grab():
-                raise DeviceUnavailable(f"camera {self.config['camera']} stopped delivering frames")
-            stamp = self.clock()  # the frame has just arrived: its grab time
-            ok, frame = self._capture.retrieve()
-            frame = frame if ok else None
+        frame, why = self._source.read()
+        self._sync_counters()
         if frame is None:
-            self.counters["decode_failures"] += 1
-            self.warn(f"{self.describe()}: a frame failed to decode; skipped")
+            if self._source.finished:
+                raise EndOfStream()
+            if not self.config["video"] and not self._source.connected:
+                raise DeviceUnavailable(why)
+            self.warn(f"{self.describe()}: {why}")
             return None
-        return self.tracker.process(frame, stamp)
+        return self.tracker.process(frame.image, frame.stamp)
 
     def close(self) -> None:
-        if self._capture is not None:
-            self._capture.release()
-            self._capture = None
+        if self._source is not None:
+            self._source.close()
 
     def shutdown(self) -> None:
         if self.tracker.detector is not None:

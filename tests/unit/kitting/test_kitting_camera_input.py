@@ -95,7 +95,7 @@ def test_video_plays_at_its_own_fps_then_ends(tmp_path):
     assert [f.media_time for f in frames] == pytest.approx([i / 10 for i in range(10)])
     assert source.finished and reasons == [f"end of {path} (10 frames)"]
     assert source.read() == (None, f"end of {path}")
-    assert source.counters["frames"] == 10 and source.counters["late"] == 0
+    assert source.counters["frames"] == 10 and source.counters["late_frames"] == 0
 
 
 def test_video_loop_replays_and_a_slow_reader_is_counted_late(tmp_path):
@@ -112,7 +112,7 @@ def test_video_loop_replays_and_a_slow_reader_is_counted_late(tmp_path):
         clock.now += 0.35 if len(levels) == 2 else 0.0     # the reader stalls once
     assert levels == [0, 1, 2, 3, 0, 1, 2, 3]
     assert notes == [f"end of {path}: playing it again"] * 2
-    assert not source.finished and source.counters["loops"] == 2 and source.counters["late"] == 1
+    assert not source.finished and source.counters["loops"] == 2 and source.counters["late_frames"] == 1
 
 
 def test_corrupt_video_frame_is_skipped_with_a_reason(tmp_path):
@@ -122,7 +122,7 @@ def test_corrupt_video_frame_is_skipped_with_a_reason(tmp_path):
     frames, reasons = read_all(source)
     assert [round(float(f.image.mean()) / 20) for f in frames] == [0, 1, 2, 3, 5, 6, 7, 8, 9]
     assert reasons == [f"{path}: frame 4 failed to decode (skipped)", f"end of {path} (9 frames)"]
-    assert source.counters["decode_failed"] == 1
+    assert source.counters["decode_failures"] == 1
 
 
 def test_unreadable_or_missing_video_is_refused(tmp_path):
@@ -152,7 +152,7 @@ def test_image_folder_in_order_with_undecodable_files_skipped(tmp_path):
     assert np.allclose(np.diff([f.stamp for f in got]), 0.2)
     assert reasons == [f"{tmp_path / 'view_1b.png'}: not an image OpenCV can decode (skipped)",
                        "end of images (4 frames)"]
-    assert source.counters["decode_failed"] == 1
+    assert source.counters["decode_failures"] == 1
     by_glob = ImageFolderSource(str(tmp_path / "view_?.png"))
     assert len(by_glob.files) == 4
     with pytest.raises(FrameSourceError, match="no images match"):
@@ -169,8 +169,9 @@ def test_looping_a_folder_without_one_good_image_ends(tmp_path):
 # -- a live camera that fails and comes back ------------------------------------------------
 class FakeCapture:
     def __init__(self, script):
-        self.script = list(script)     # per read: an image, None (read fails) or an exception
+        self.script = list(script)     # per grab: an image, None (the grab fails) or an exception
         self.released = False
+        self.grabbed = None
 
     def isOpened(self):
         return True
@@ -178,11 +179,15 @@ class FakeCapture:
     def get(self, prop):
         return {cv2.CAP_PROP_FRAME_WIDTH: 64, cv2.CAP_PROP_FRAME_HEIGHT: 48, cv2.CAP_PROP_FPS: 30}.get(prop, 0)
 
-    def read(self):
+    def grab(self):
         item = self.script.pop(0) if self.script else None
         if isinstance(item, Exception):
             raise item
-        return (item is not None), item
+        self.grabbed = item
+        return item is not None
+
+    def retrieve(self):
+        return (self.grabbed is not None), self.grabbed
 
     def release(self):
         self.released = True
