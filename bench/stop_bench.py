@@ -12,7 +12,6 @@ Run: bench/run stop_bench [--trials 20]; writes bench/results/stop_bench.json.
 import argparse
 import os
 import sys
-import threading
 import time
 
 import numpy as np
@@ -22,9 +21,11 @@ from bench_common import write_results
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(ROOT, "src", "hw_interface"))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_common"))
+# The STOP experiment is the rostest check's (tests/nodes/hw_stop_check), in process here.
+sys.path.insert(0, os.path.join(ROOT, "tests", "nodes"))
+from stop_trial import HOME, LONG, stop_during  # noqa: E402
+
 URDF = os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf")
-HOME = np.array([0.0, -1.5707963, 1.5707963, -1.5707963, -1.5707963, 0.0])
-LONG = HOME + [2.8, 0.0, 0.0, 0.0, 0.0, 0.0]
 
 
 def stats(samples):
@@ -49,23 +50,16 @@ def trial(dispatcher, driver, still, rng):
     from hw_interface.protocol import CommandIndex, Result
     answer = dispatcher.handle(CommandIndex.MOVE_J, joints=list(HOME))
     assert answer.result == Result.SUCCESS, answer.reason
-    box = {}
-
-    def move():
-        box["answer"] = dispatcher.handle(CommandIndex.MOVE_J, joints=list(LONG))
-        box["at"] = time.perf_counter()
-
-    thread = threading.Thread(target=move)
-    thread.start()
     # STOP at a random moment 0.3-1.5 s into the move (accelerating or cruising).
-    time.sleep(rng.uniform(0.3, 1.5))
-    stop_at = time.perf_counter()
-    dispatcher.handle(CommandIndex.STOP)
-    stop_answered = time.perf_counter()
+    delay = rng.uniform(0.3, 1.5)
+    began = time.monotonic()
+    runner, stop_at, stop_took = stop_during(lambda: dispatcher.handle(CommandIndex.MOVE_J, joints=list(LONG)),
+                                             lambda: time.monotonic() - began >= delay,
+                                             lambda: dispatcher.handle(CommandIndex.STOP), timeout=5.0)
     # Still: the first instant from which the arm stays still for 0.1 s.
     still_since = None
     while True:
-        now = time.perf_counter()
+        now = time.monotonic()
         if still():
             still_since = still_since or now
             if now - still_since >= 0.1:
@@ -75,9 +69,8 @@ def trial(dispatcher, driver, still, rng):
         if now - stop_at > 5.0:
             raise RuntimeError("the arm never came to rest")
         time.sleep(0.001)
-    thread.join(5.0)
-    assert box["answer"].result == Result.INTERRUPTED, box["answer"].reason
-    return box["at"] - stop_at, stop_answered - stop_at, still_since - stop_at
+    assert runner.error is None and runner.result.result == Result.INTERRUPTED, runner.error or runner.result.reason
+    return runner.returned_at - stop_at, stop_took, still_since - stop_at
 
 
 def main():
