@@ -25,11 +25,13 @@ from motion_common.ros_params import load_private_params
 from motion_sensor.msg import Gesture, hand
 
 from . import programs as program_files
-from .access import check_access_config
+from .access import check_access_config, load_token
 from .config import DASHBOARD_PARAMETERS
 from .jobs import Job, campaign_command, run_program_command
 from .readings import driver_status, sequencer_counters, tool_reading
 from .state import DashboardState
+from motion_common.ros_interface import publisher, service_proxy, subscriber
+from dashboard.interfaces import DASHBOARD
 
 LATCH_SERVICE = "motion_controller/latch_stop"
 SPAWN_SERVICE = "kitting_cell_sim/spawn"
@@ -47,30 +49,32 @@ class DashboardNode:
         self.fallback_estop = False
         self.programs_dir = os.path.abspath(params["programs_dir"])
         self.output_dir = os.path.abspath(params["output_dir"])
-        self.engage_pub = rospy.Publisher("motion_commander/engage", Bool, queue_size=1)
-        self.estop_pub = rospy.Publisher("motion_commander/estop", Bool, queue_size=1)
-        self.ratio_pub = rospy.Publisher("motion_commander/set_speed_ratio", Float64, queue_size=1)
-        self.filter_pub = rospy.Publisher("motion_sensor/set_filter", String, queue_size=1)
-        self.campaign_stop_pub = rospy.Publisher("kitting_trials/stop", Bool, queue_size=1)
-        self.latch = rospy.ServiceProxy(LATCH_SERVICE, SetBool)
+        self.engage_pub = publisher(DASHBOARD, "motion_commander/engage", queue_size=1)
+        self.estop_pub = publisher(DASHBOARD, "motion_commander/estop", queue_size=1)
+        self.ratio_pub = publisher(DASHBOARD, "motion_commander/set_speed_ratio", queue_size=1)
+        self.filter_pub = publisher(DASHBOARD, "motion_sensor/set_filter", queue_size=1)
+        self.campaign_stop_pub = publisher(DASHBOARD, "kitting_trials/stop", queue_size=1)
+        self.latch = service_proxy(DASHBOARD, LATCH_SERVICE)
         s = self.state
-        subscribe = rospy.Subscriber
-        subscribe("motion_commander/status", UInt8, lambda m: s.set("status", int(m.data)), queue_size=10)
-        subscribe("motion_controller/stop_latched", Bool, lambda m: s.set("stop_latched", bool(m.data)), queue_size=5)
-        subscribe("motion_commander/speed_ratio", Float64, lambda m: s.set("speed_ratio", float(m.data)), queue_size=5)
-        subscribe("motion_sensor/filter", String, lambda m: s.set("filter", m.data), queue_size=5)
-        subscribe("motion_sensor/active_device", String, lambda m: s.set("device", m.data), queue_size=5)
-        subscribe("motion_sensor/raw_hand", hand, self.on_hand, queue_size=1)
-        subscribe("motion_sensor/gesture", Gesture, self.on_gesture, queue_size=10)
-        subscribe("teach/feedback", String, lambda m: s.set("teach_feedback", m.data), queue_size=10)
-        subscribe("motion_commander/latency", StageLatency, lambda m: s.add_latency(m.driver), queue_size=100)
-        subscribe("joint_states", JointState, self.on_joints, queue_size=1)
-        subscribe("motion_controller/tool_pose", PoseStamped, self.on_tool, queue_size=1)
-        subscribe("motion_commander/target", PoseStamped, self.on_target, queue_size=10)
-        subscribe("diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=10)
-        subscribe("motion_controller/status", DiagnosticStatus, self.on_driver, queue_size=5)
-        subscribe("kitting_trials/progress", String, lambda m: self.on_campaign("campaign_progress", m), queue_size=5)
-        subscribe("kitting_trials/result", String, lambda m: self.on_campaign("campaign_result", m), queue_size=5)
+        def subscribe(name, callback, **kwargs):
+            return subscriber(DASHBOARD, name, callback, **kwargs)
+
+        subscribe("motion_commander/status", lambda m: s.set("status", int(m.data)), queue_size=10)
+        subscribe("motion_controller/stop_latched", lambda m: s.set("stop_latched", bool(m.data)), queue_size=5)
+        subscribe("motion_commander/speed_ratio", lambda m: s.set("speed_ratio", float(m.data)), queue_size=5)
+        subscribe("motion_sensor/filter", lambda m: s.set("filter", m.data), queue_size=5)
+        subscribe("motion_sensor/active_device", lambda m: s.set("device", m.data), queue_size=5)
+        subscribe("motion_sensor/raw_hand", self.on_hand, queue_size=1)
+        subscribe("motion_sensor/gesture", self.on_gesture, queue_size=10)
+        subscribe("teach/feedback", lambda m: s.set("teach_feedback", m.data), queue_size=10)
+        subscribe("motion_commander/latency", lambda m: s.add_latency(m.driver), queue_size=100)
+        subscribe("joint_states", self.on_joints, queue_size=1)
+        subscribe("motion_controller/tool_pose", self.on_tool, queue_size=1)
+        subscribe("motion_commander/target", self.on_target, queue_size=10)
+        subscribe("diagnostics", self.on_diagnostics, queue_size=10)
+        subscribe("motion_controller/status", self.on_driver, queue_size=5)
+        subscribe("kitting_trials/progress", lambda m: self.on_campaign("campaign_progress", m), queue_size=5)
+        subscribe("kitting_trials/result", lambda m: self.on_campaign("campaign_result", m), queue_size=5)
         self.poll(None)
         self.poll_timer = rospy.Timer(rospy.Duration(1.0), self.poll)
 
@@ -227,9 +231,23 @@ class DashboardNode:
             job.stop(timeout=5.0)
 
 
+def machine_names(host: str) -> list:
+    """This machine's name and addresses when serving every interface (0.0.0.0 or ::): the
+    names a browser on the network puts in the Host header."""
+    if host not in ("0.0.0.0", "::"):
+        return []
+    import socket
+    names = {socket.gethostname(), socket.getfqdn()}
+    try:
+        names |= {info[4][0] for info in socket.getaddrinfo(socket.gethostname(), None)}
+    except OSError:
+        pass
+    return sorted(names)
+
+
 def _service_exists(name: str) -> bool:
     try:
-        return rosservice.get_service_uri(name) is not None
+        return rosservice.get_service_uri(rospy.resolve_name(name)) is not None
     except Exception:  # noqa: BLE001 - the master may be gone during shutdown; treat as absent
         return False
 
@@ -239,6 +257,7 @@ def main():
     rospy.init_node("dashboard", disable_signals=True)
     params = load_private_params(DASHBOARD_PARAMETERS, "dashboard")
     try:
+        params["token"] = load_token(params["token"], params["token_file"])
         check_access_config(params["host"], params["token"])
     except ParameterError as exc:
         rospy.logfatal("dashboard: %s", exc)
@@ -249,7 +268,8 @@ def main():
     rospy.on_shutdown(app.shutdown)
     url = f"http://{params['host']}:{params['port']}/" + ("?token=<token>" if params["token"] else "")
     try:
-        serve(node.state, node, params, on_started=lambda: rospy.loginfo("dashboard: serving %s", url))
+        serve(node.state, node, params, on_started=lambda: rospy.loginfo("dashboard: serving %s", url),
+              extra_hosts=params["allowed_hosts"] + machine_names(params["host"]))
     except KeyboardInterrupt:
         pass  # uvicorn re-raises the SIGINT it handled (roslaunch's shutdown): a normal end
     finally:

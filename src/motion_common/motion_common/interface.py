@@ -22,7 +22,8 @@ from typing import Dict, Iterable, List, Sequence, Tuple
 
 from .params import ParamSchema
 
-__all__ = ["Topic", "Service", "NodeInterface", "interfaces_markdown", "resolve"]
+__all__ = ["Topic", "Service", "NodeInterface", "interfaces_markdown", "resolve", "graph_mismatches",
+           "GRAPH_IGNORED"]
 
 
 @dataclass(frozen=True)
@@ -176,3 +177,34 @@ def interfaces_markdown(interfaces: Iterable[NodeInterface], title: str = "Node 
         for interface in sorted(by_package[package], key=lambda i: i.node):
             lines += [interface.markdown(root), ""]
     return "\n".join(lines).rstrip() + "\n"
+
+
+#: Graph names a running node has that are not its own interface: rospy's logging services
+#: and /rosout, and tf (global by design: frames, not topic names, tell robots apart).
+GRAPH_IGNORED = ("/rosout", "/tf", "/tf_static")
+_LOGGER_SERVICES = ("/get_loggers", "/set_logger_level")
+
+
+def graph_mismatches(interface: NodeInterface, node_name: str, system_state, remaps=None) -> List[str]:
+    """What a running node ``node_name`` (fully qualified, e.g. ``/left/sequencer``) does
+    differently from its declaration, given the master's ``getSystemState()`` answer
+    (publishers, subscribers, services: lists of [name, [node, ...]]) and the launch
+    file's ``remaps`` of that node ({declared name: target}). Empty when they agree: every
+    topic and service it has is declared, and every declared one that is not optional is
+    there. Service clients are not visible to the master and are not compared."""
+    remaps = remaps or {}
+    namespace = node_name.rsplit("/", 1)[0] or "/"
+    problems = []
+    for kind, state, entries in (("publishes", system_state[0], interface.publishes),
+                                 ("subscribes", system_state[1], interface.subscribes),
+                                 ("serves", system_state[2], interface.serves)):
+        actual = {name for name, nodes in state if node_name in nodes and name not in GRAPH_IGNORED
+                  and not name.endswith(_LOGGER_SERVICES)}
+        expected = {resolve(remaps.get(entry.name, entry.name), namespace, node_name): entry for entry in entries}
+        undeclared = sorted(actual - set(expected))
+        missing = sorted(name for name, entry in expected.items() if not entry.optional and name not in actual)
+        if undeclared:
+            problems.append(f"{node_name} {kind} {undeclared}, which {interface.key} does not declare")
+        if missing:
+            problems.append(f"{node_name} does not {kind[:-1]} {missing}, which {interface.key} declares")
+    return problems
