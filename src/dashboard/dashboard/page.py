@@ -9,7 +9,7 @@ from nicegui import app, run, ui
 
 from motion_sensor.filters import FILTERS as FILTER_REGISTRY
 
-from .access import token_accepted
+from .access import HostOriginGuard, token_accepted
 from .controls import control_states
 from .status_style import status_view
 
@@ -332,8 +332,11 @@ class DashboardPage:
         ui.notify(await run.io_bound(self.actions.end_campaign))
 
 
-def serve(state, actions, params: Dict, on_started: Callable[[], None] = None) -> None:
-    """Serve the page until the server is told to stop (SIGINT, or app.shutdown())."""
+def serve(state, actions, params: Dict, on_started: Callable[[], None] = None, extra_hosts=()) -> None:
+    """Serve the page until the server is told to stop (SIGINT, or app.shutdown()). Every
+    request, the page's socket.io connection included, first passes the Host/Origin guard
+    (``extra_hosts``: names besides loopback and ``host`` that this server answers to)."""
+    app.add_middleware(HostOriginGuard, host=params["host"], extra_hosts=tuple(extra_hosts))
 
     @ui.page("/")
     def index(token: str = ""):

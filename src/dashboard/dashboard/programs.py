@@ -4,7 +4,7 @@ import os
 from dataclasses import dataclass
 from typing import List, Optional
 
-from motion_commander.program import ProgramError, load_program
+from motion_commander.program import ProgramError, load_program, program_path  # noqa: F401 (re-exported: the page names files by it)
 
 
 @dataclass
@@ -34,13 +34,6 @@ def list_programs(folder: str) -> List[ProgramInfo]:
             info.error = str(exc)
         found.append(info)
     return sorted(found, key=lambda p: (-p.modified, p.name))
-
-
-def program_path(folder: str, name: str) -> str:
-    """The file of program ``name`` in ``folder``; ValueError for anything but a plain name."""
-    if not name or name != os.path.basename(name) or name.startswith(".") or "\0" in name:
-        raise ValueError(f"not a program name: {name!r}")
-    return os.path.join(folder, name + ".yaml")
 
 
 def delete_program(folder: str, name: str) -> Optional[str]:

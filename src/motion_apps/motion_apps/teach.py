@@ -29,7 +29,8 @@ from typing import Callable, Dict, List, Optional
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema, read_yaml_file
 
-from motion_commander.program import Program, ProgramError, Waypoint, save_program
+from motion_common.atomic_file import remove_stale_temp_files
+from motion_commander.program import Program, ProgramError, Waypoint, program_path, save_program
 
 COMMANDS = ("mark_waypoint", "grip", "release", "undo", "save")
 DEFAULT_PROGRAMS_DIR = os.path.join("output", "programs")
@@ -96,6 +97,9 @@ class TeachSession:
         self.programs_dir = programs_dir
         self.clock = clock
         self.program_name = program_name or time.strftime("teach_%Y%m%d_%H%M%S", time.localtime(clock()))
+        program_path(programs_dir, self.program_name)  # ValueError now, not at the first save
+        # Temporary files of saves that were killed go at start, not only at the next save.
+        remove_stale_temp_files(programs_dir)
         # Checking an already checked config is harmless: pass load_gesture_config's result.
         self.config = check_gesture_config(config, "teach config")
         self.waypoints: List[Waypoint] = []
@@ -199,7 +203,7 @@ class TeachSession:
     def _do_save(self) -> Feedback:
         if not self.waypoints:
             return Feedback(False, "save", "ignored: nothing to save (no waypoints yet)")
-        path = os.path.join(self.programs_dir, self.program_name + ".yaml")
+        path = program_path(self.programs_dir, self.program_name)
         try:
             self.saved_path = save_program(self.program(), path)
         except (OSError, ProgramError) as exc:

@@ -177,6 +177,15 @@ def load_program(path: str) -> Program:
     return parse_program(data, path)
 
 
+def program_path(folder: str, name: str) -> str:
+    """The file of program ``name`` in ``folder``: ValueError for anything but a plain name
+    (no folder part, no leading dot, no NUL), so a name from a page or a parameter can
+    never reach outside ``folder``."""
+    if not name or name != os.path.basename(name) or name.startswith(".") or "\0" in name or name in ("..",):
+        raise ValueError(f"not a program name: {name!r} (a plain file name without a folder, e.g. pick_a)")
+    return os.path.join(folder, name + ".yaml")
+
+
 def save_program(program: Program, path: str) -> str:
     """Write ``program`` to ``path`` atomically; return the absolute path.
 

@@ -150,3 +150,11 @@ def test_default_programs_folder_and_name(robot):
     session = TeachSession("ur5e", robot, clock=lambda: 0.0)
     assert session.programs_dir == os.path.join("output", "programs")
     assert session.program_name.startswith("teach_")
+
+
+@pytest.mark.parametrize("name", ["../escaped", "a/b", ".hidden", "..", "x\0y"])
+def test_program_name_is_a_plain_name(tmp_path, name):
+    """The same rule as the dashboard's: a name can never reach outside the programs folder."""
+    with pytest.raises(ValueError, match="not a program name"):
+        TeachSession("ur5e", lambda: None, programs_dir=str(tmp_path), program_name=name)
+    assert list(tmp_path.iterdir()) == []
