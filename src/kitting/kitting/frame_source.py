@@ -4,13 +4,36 @@
 default for a camera that cannot be opened or is lost: it is reopened with exponential
 backoff (``motion_sensor.device.Backoff``), the waits inside ``read`` through the injected
 ``sleep``."""
+
 from motion_common import video_capture
-from motion_common.video_capture import (IMAGE_EXTENSIONS, Frame, FrameSource, FrameSourceError, ImageFolderSource,
-                                         ReadResult, VideoSource, as_bgr, list_images, open_camera)
+from motion_common.video_capture import (
+    IMAGE_EXTENSIONS,
+    Frame,
+    FrameSource,
+    FrameSourceError,
+    ImageFolderSource,
+    ReadResult,
+    VideoSource,
+    as_bgr,
+    list_images,
+    open_camera,
+)
 from motion_sensor.device import Backoff
 
-__all__ = ["IMAGE_EXTENSIONS", "Frame", "FrameSource", "FrameSourceError", "ImageFolderSource", "ReadResult",
-           "VideoSource", "DeviceSource", "as_bgr", "list_images", "open_camera", "open_source"]
+__all__ = [
+    "IMAGE_EXTENSIONS",
+    "Frame",
+    "FrameSource",
+    "FrameSourceError",
+    "ImageFolderSource",
+    "ReadResult",
+    "VideoSource",
+    "DeviceSource",
+    "as_bgr",
+    "list_images",
+    "open_camera",
+    "open_source",
+]
 
 
 class DeviceSource(video_capture.DeviceSource):
