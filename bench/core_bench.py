@@ -22,8 +22,8 @@ from motion_common.kinematics import RobotKinematics  # noqa: E402
 from motion_commander.teleop import TeleopMapper, make_clutch  # noqa: E402
 from motion_commander.config import load_teleop_config  # noqa: E402
 from motion_commander.teleop_core import TeleopCore  # noqa: E402
-from motion_sensor.leap_v6 import frame_to_sample, read_recording  # noqa: E402
-from motion_sensor.sequencer import Sequencer  # noqa: E402
+from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording  # noqa: E402
+from motion_sensor.sequencing.sequencer import Sequencer  # noqa: E402
 
 HOMES = {"ur5e": [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0],
          "ur10e": [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0],

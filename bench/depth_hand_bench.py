@@ -27,10 +27,10 @@ for package in ("motion_sensor", "motion_common"):
 import cv2  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
-from motion_sensor.depth_hand import OPTICAL_TO_BODY, DepthHandTracker  # noqa: E402
-from motion_sensor.depth_image import decode_depth, encode_depth_mm  # noqa: E402
-from motion_sensor.synthetic_depth import DEFAULT_INTRINSICS as INTR  # noqa: E402
-from motion_sensor.synthetic_depth import hand_path, render_hand  # noqa: E402
+from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY, DepthHandTracker  # noqa: E402
+from motion_sensor.devices.depth_image import decode_depth, encode_depth_mm  # noqa: E402
+from motion_sensor.testing.synthetic_depth import DEFAULT_INTRINSICS as INTR  # noqa: E402
+from motion_sensor.testing.synthetic_depth import hand_path, render_hand  # noqa: E402
 
 
 def stats_ms(samples):

@@ -17,7 +17,7 @@ from scipy.spatial.transform import Rotation
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_sensor"))
-from motion_sensor.registration import register  # noqa: E402
+from motion_sensor.registration.device_registration import register  # noqa: E402
 
 
 def shape(u):

@@ -57,7 +57,7 @@ def recording_path(name):
 
 def passes_for(name, min_commands):
     """Passes over ``name`` that give at least ``min_commands`` commands."""
-    from motion_sensor.replay import load_samples
+    from motion_sensor.devices.replay import load_samples
     samples, _ = load_samples(recording_path(name))
     per_pass = max(1, sum(1 for _, s in samples if s.hands_num) - UNSENT_PER_PASS)
     return max(1, math.ceil(min_commands / per_pass))

@@ -26,8 +26,8 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_sensor"))
 
 from bench_common import RESULTS, write_results  # noqa: E402
-from motion_sensor.filters import make_filter  # noqa: E402
-from motion_sensor.leap_v6 import read_recording, select_primary  # noqa: E402
+from motion_sensor.sequencing.filters import make_filter  # noqa: E402
+from motion_sensor.devices.leap_v6 import read_recording, select_primary  # noqa: E402
 
 STILL = ["Waiting-110fps", "waiting-short"]
 MOVING = ["wave", "flapping", "test-paddle-rightwards", "rollAndPitchCropped"]

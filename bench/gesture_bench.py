@@ -35,9 +35,9 @@ from bench_common import ROOT, write_results
 
 sys.path[:0] = [os.path.join(ROOT, "src", "motion_sensor"), os.path.join(ROOT, "src", "motion_common"),
                 os.path.join(ROOT, "tests", "tools")]
-from motion_sensor.dtw_classifier import DTWClassifier  # noqa: E402
-from motion_sensor.gesture_frame import GestureFrame  # noqa: E402
-from motion_sensor.static_poses import StaticPoseDetector  # noqa: E402
+from motion_sensor.gestures.dtw_classifier import DTWClassifier  # noqa: E402
+from motion_sensor.gestures.gesture_frame import GestureFrame  # noqa: E402
+from motion_sensor.gestures.static_poses import StaticPoseDetector  # noqa: E402
 import air_letters  # noqa: E402
 
 SHREC = os.path.join(ROOT, "..", "shared", "data", "shrec17_train", "shrec17_train.npz")

@@ -23,8 +23,8 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path[:0] = [os.path.join(ROOT, "src", "motion_sensor"), os.path.join(ROOT, "src", "motion_common"),
                 os.path.join(ROOT, "tests", "tools"), os.path.join(ROOT, "bench")]
 import air_letters  # noqa: E402
-from motion_sensor.dtw_classifier import DTWClassifier  # noqa: E402
-from motion_sensor.gesture_features import FeatureConfig  # noqa: E402
+from motion_sensor.gestures.dtw_classifier import DTWClassifier  # noqa: E402
+from motion_sensor.gestures.gesture_features import FeatureConfig  # noqa: E402
 
 SHREC = os.path.join(ROOT, "..", "shared", "data", "shrec17_train", "shrec17_train.npz")
 CAMERA_TO_LEAPLIKE = np.array([1.0, -1.0, -1.0])

@@ -24,8 +24,8 @@ RECORDINGS = ["Waiting-110fps", "rollAndPitchCropped"]
 def main():
     os.environ["ROS_MASTER_URI"] = f"http://localhost:{MASTER}"
     import rospy
-    from motion_sensor.leap_server import LeapReplayServer
-    from motion_sensor.leap_v6 import parse_message, select_primary
+    from motion_sensor.devices.leap_server import LeapReplayServer
+    from motion_sensor.devices.leap_v6 import parse_message, select_primary
     from motion_sensor.msg import hand
 
     master = subprocess.Popen(["roscore", "-p", str(MASTER)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)

@@ -16,10 +16,10 @@ from bench_common import write_results
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_sensor"))
 
-from motion_sensor.filters import make_filter  # noqa: E402
+from motion_sensor.sequencing.filters import make_filter  # noqa: E402
 from motion_sensor.hand_sample import HandSample  # noqa: E402
-from motion_sensor.leap_v6 import read_recording, select_primary  # noqa: E402
-from motion_sensor.sequencer import Sequencer, SequencerConfig  # noqa: E402
+from motion_sensor.devices.leap_v6 import read_recording, select_primary  # noqa: E402
+from motion_sensor.sequencing.sequencer import Sequencer, SequencerConfig  # noqa: E402
 
 
 def stream_1khz(seconds=5.0):

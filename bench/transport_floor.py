@@ -185,7 +185,7 @@ def role_relay(out, count, variant):
 
 def recorded_hands():
     """The right hand's (position, orientation) of a real Leap recording, looped by the source."""
-    from motion_sensor.replay import load_samples
+    from motion_sensor.devices.replay import load_samples
     samples, _ = load_samples(RECORDING)
     return [(s.position.tolist(), s.orientation.tolist()) for _, s in samples if s.hands_num]
 

@@ -25,8 +25,8 @@ for path in ("src/motion_common", "src/motion_sensor", "tests/tools"):
     sys.path.insert(0, os.path.join(ROOT, path))
 
 from hand_warp import HEIGHT, PHOTOS, WIDTH, warped_sequence  # noqa: E402
-from motion_sensor.mediapipe_hands import MediaPipeHandDetector  # noqa: E402
-from motion_sensor.webcam_hand import WebcamHandTracker  # noqa: E402
+from motion_sensor.devices.mediapipe_hands import MediaPipeHandDetector  # noqa: E402
+from motion_sensor.devices.webcam_hand import WebcamHandTracker  # noqa: E402
 
 FOCAL = 0.5 * WIDTH / np.tan(np.radians(60.0) / 2)  # the tracker's default hfov_deg
 

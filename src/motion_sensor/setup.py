@@ -2,4 +2,7 @@
 from setuptools import setup
 from catkin_pkg.python_setup import generate_distutils_setup
 
-setup(**generate_distutils_setup(packages=["motion_sensor"], package_dir={"": "."}))
+setup(**generate_distutils_setup(
+    packages=["motion_sensor", "motion_sensor.devices", "motion_sensor.sequencing", "motion_sensor.gestures",
+              "motion_sensor.registration", "motion_sensor.testing"],
+    package_dir={"": "."}))

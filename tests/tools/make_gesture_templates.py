@@ -8,7 +8,7 @@ Run: .venv/bin/python tests/tools/make_gesture_templates.py [--out DIR] [--count
 what this script writes. Axes are the hand message's (REP 103: x forward, y left, z up),
 as seen by an operator facing forward: "right" is -y, "up" is +z; the circle is drawn
 clockwise as the operator sees it, in the vertical y-z plane. Files: <DIR>/<label>/<n>.csv
-with rows "x y z t" (mm, ms), see motion_sensor.gesture_templates.
+with rows "x y z t" (mm, ms), see motion_sensor.gestures.gesture_templates.
 """
 import argparse
 import os
@@ -19,7 +19,7 @@ import numpy as np
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_sensor"))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_common"))
-from motion_sensor.gesture_templates import format_path, write_atomic  # noqa: E402
+from motion_sensor.gestures.gesture_templates import format_path, write_atomic  # noqa: E402
 
 LABELS = ("swipe_right", "swipe_left", "swipe_up", "swipe_down", "circle")
 DIRECTIONS = {"swipe_right": (0, -1, 0), "swipe_left": (0, 1, 0), "swipe_up": (0, 0, 1), "swipe_down": (0, 0, -1)}

@@ -7,7 +7,7 @@ from typing import Callable, Dict
 
 from nicegui import app, run, ui
 
-from motion_sensor.filters import FILTERS as FILTER_REGISTRY
+from motion_sensor.sequencing.filters import FILTERS as FILTER_REGISTRY
 
 from .access import HostOriginGuard, token_accepted
 from .controls import control_states

@@ -2,7 +2,7 @@
 (``motion_common.video_capture``: a live camera, a video file or a folder of images, each
 ``read() -> (Frame, "")`` or ``(None, reason)`` with the same counters), with the cell's
 default for a camera that cannot be opened or is lost: it is reopened with exponential
-backoff (``motion_sensor.device.Backoff``), the waits inside ``read`` through the injected
+backoff (``motion_sensor.devices.device.Backoff``), the waits inside ``read`` through the injected
 ``sleep``."""
 
 from motion_common import video_capture
@@ -18,7 +18,7 @@ from motion_common.video_capture import (
     list_images,
     open_camera,
 )
-from motion_sensor.device import Backoff
+from motion_sensor.devices.device import Backoff
 
 __all__ = [
     "IMAGE_EXTENSIONS",
@@ -38,7 +38,7 @@ __all__ = [
 
 class DeviceSource(video_capture.DeviceSource):
     """A live camera (``motion_common.video_capture.DeviceSource``), reopened with backoff:
-    ``backoff`` defaults to ``motion_sensor.device.Backoff()``."""
+    ``backoff`` defaults to ``motion_sensor.devices.device.Backoff()``."""
 
     def __init__(self, *args, backoff=None, **kwargs):
         super().__init__(*args, backoff=backoff or Backoff(), **kwargs)
@@ -46,5 +46,5 @@ class DeviceSource(video_capture.DeviceSource):
 
 def open_source(*args, backoff=None, **kwargs) -> FrameSource:
     """``motion_common.video_capture.open_source`` with a camera reopened with backoff
-    (``backoff`` defaults to ``motion_sensor.device.Backoff()``)."""
+    (``backoff`` defaults to ``motion_sensor.devices.device.Backoff()``)."""
     return video_capture.open_source(*args, backoff=backoff or Backoff(), **kwargs)

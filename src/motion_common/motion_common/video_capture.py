@@ -32,7 +32,7 @@ Sources:
 
 - ``DeviceSource`` (``cv2.VideoCapture(index)``): requests width/height/fps (and a FOURCC
   such as MJPG). A camera that cannot be opened, or is lost, is released; with a
-  ``backoff`` (``next()`` and ``reset()``, e.g. ``motion_sensor.device.Backoff``) the next
+  ``backoff`` (``next()`` and ``reset()``, e.g. ``motion_sensor.devices.device.Backoff``) the next
   attempt waits for its delay inside ``read`` through the injected ``sleep``; without one
   the caller decides when to ``open()`` again (a hand device's runner does).
 - ``VideoSource`` (a video FILE): paced or as fast as read, ``loop`` replays it. A frame

@@ -9,9 +9,9 @@ device's libraries. No ROS import.
 from motion_common.interface import NodeInterface, Topic
 from motion_common.params import Param, ParamSchema
 
-from .device_interface import device_interface
-from .gesture_recognizer import RECOGNIZER_PARAMS
-from .sequencer import SEQUENCER_PARAMS
+from motion_sensor.devices.device_interface import device_interface
+from motion_sensor.gestures.gesture_recognizer import RECOGNIZER_PARAMS
+from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS
 
 __all__ = ["SEQUENCER", "GESTURE_RECOGNIZER", "RECORD_HANDS", "REGISTRATION_TF", "device_nodes", "all_interfaces"]
 
@@ -76,12 +76,12 @@ def device_nodes():
     """The declarations of the device nodes (imports every device class)."""
     from dataclasses import replace
 
-    from .depth_device import DepthTopicDevice
-    from .kinect import FakenectKinectDevice
-    from .leap_client import LeapDevice
-    from .replay import ReplayDevice
-    from .spacemouse import SpaceMouseDevice
-    from .webcam_device import WebcamHandDevice
+    from motion_sensor.devices.depth_device import DepthTopicDevice
+    from motion_sensor.devices.kinect import FakenectKinectDevice
+    from motion_sensor.devices.leap_client import LeapDevice
+    from motion_sensor.devices.replay import ReplayDevice
+    from motion_sensor.devices.spacemouse import SpaceMouseDevice
+    from motion_sensor.devices.webcam_device import WebcamHandDevice
 
     kinect = device_interface(FakenectKinectDevice, "kinect_driver",
                               "A Kinect v1 through libfreenect, or a fakenect dump (`~fakenect_dump`, finite).")

@@ -7,7 +7,7 @@ import numpy as np
 
 from motion_sensor.msg import hand
 
-from .hand_sample import HandSample
+from motion_sensor.hand_sample import HandSample
 
 
 def sample_to_msg(sample: HandSample) -> hand:

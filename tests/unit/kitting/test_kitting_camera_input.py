@@ -21,7 +21,7 @@ from kitting.image_msgs import (array_to_image, bgr_to_image, camera_info_from_i
 from kitting.calibration import write_intrinsics_yaml
 from kitting.intrinsics_file import IntrinsicsFileError, load_camera_info_yaml, resolve_camera_info_url
 from kitting.sim_scene import render_board_views
-from motion_sensor.device import Backoff
+from motion_sensor.devices.device import Backoff
 
 NODES = os.path.join(ROOT, "src", "kitting", "nodes")
 PYTHON = os.path.join(ROOT, ".venv", "bin", "python")

@@ -13,8 +13,8 @@ from ..conftest import ROOT
 from motion_commander.program import load_program
 from motion_apps.teach import TeachSession, load_gesture_config
 from motion_apps.teach_report import placement_error, plot_taught_path, taught_place, write_summary
-from motion_sensor.gesture_frame import frames_from_recording
-from motion_sensor.gesture_recognizer import GestureRecognizer
+from motion_sensor.gestures.gesture_frame import frames_from_recording
+from motion_sensor.gestures.gesture_recognizer import GestureRecognizer
 
 sys.path.insert(0, os.path.join(ROOT, "tests", "tools"))
 import make_teach_stream  # noqa: E402

@@ -6,7 +6,7 @@ from motion_commander.errors import MotionCommanderError
 from motion_commander.teleop import TeleopMapper
 from motion_sensor.errors import MotionSensorError
 from motion_sensor.hand_sample import HandSample
-from motion_sensor.sequencer import SEQUENCER_PARAMS, Sequencer, SequencerConfig, filter_params_for
+from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS, Sequencer, SequencerConfig, filter_params_for
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 

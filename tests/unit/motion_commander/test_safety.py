@@ -216,8 +216,8 @@ def test_carried_and_prepared_command_figures_give_the_same_commands_as_recomput
     import os
 
     from ..conftest import DATA
-    from motion_sensor.leap_v6 import frame_to_sample, read_recording
-    from motion_sensor.sequencer import Sequencer
+    from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording
+    from motion_sensor.sequencing.sequencer import Sequencer
     frames = read_recording(os.path.join(DATA, "test-paddle-rightwards.jsonl.gz")).frames
     runs = []
     for recompute, prepare in ((False, False), (True, False), (False, True)):
@@ -287,8 +287,8 @@ def test_the_bound_gives_the_guards_own_decisions_where_it_acts():
     import os
 
     from ..conftest import DATA
-    from motion_sensor.leap_v6 import frame_to_sample, read_recording
-    from motion_sensor.sequencer import Sequencer
+    from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording
+    from motion_sensor.sequencing.sequencer import Sequencer
     frames = read_recording(os.path.join(DATA, "test-paddle-rightwards.jsonl.gz")).frames
     runs = []
     for prepare in (False, True):

@@ -7,7 +7,7 @@ import pytest
 
 from motion_commander.session_report import (SessionData, final_error, format_summary, plot_session, summarize,
                                              tracking_errors, write_summary_json)
-from motion_sensor.replay import replay_schedule
+from motion_sensor.devices.replay import replay_schedule
 
 
 def line(t, offset=0.0):
@@ -64,7 +64,7 @@ def test_replay_schedule_rate_offset_and_fast_mode():
 
 def test_csv_replay_reads_rows_and_reports_bad_ones(tmp_path):
     from motion_sensor.errors import MotionSensorError
-    from motion_sensor.replay import read_csv
+    from motion_sensor.devices.replay import read_csv
     path = tmp_path / "hand.csv"
     path.write_text("stamp,x,y,z,qx,qy,qz,qw,hand_type\n"
                     "1.00,0.1,0.0,0.2,0,0,0,1,right\n"

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.filters import KalmanFilter, OneEuroFilter, make_filter
+from motion_sensor.sequencing.filters import KalmanFilter, OneEuroFilter, make_filter
 
 from ..conftest import ROOT
 
@@ -127,7 +127,7 @@ def test_shipped_sequencer_yaml_states_the_filters_defaults():
     import inspect
     import os
     import yaml
-    from motion_sensor.filters import FILTERS
+    from motion_sensor.sequencing.filters import FILTERS
     path = os.path.join(ROOT, "src", "motion_sensor", "config", "sequencer.yaml")
     with open(path, encoding="utf-8") as fh:
         params = yaml.safe_load(fh)["filter_params"]
@@ -142,7 +142,7 @@ def test_shipped_sequencer_yaml_states_the_filters_defaults():
 def test_fast_likelihood_matches_scipy(rng):
     """The IMM's likelihood shortcut gives scipy's multivariate normal log-density."""
     from scipy.stats import multivariate_normal
-    from motion_sensor.filters import _gaussian_log_density
+    from motion_sensor.sequencing.filters import _gaussian_log_density
     for _ in range(20):
         a = rng.normal(size=(3, 3))
         covariance = a @ a.T + 0.01 * np.eye(3)
@@ -158,7 +158,7 @@ def test_kalman_loads_filterpy_when_built_not_on_the_first_frame():
     import subprocess
     import sys
     package_root = os.path.join(ROOT, "src", "motion_sensor")
-    code = ("import sys; from motion_sensor.filters import make_filter; "
+    code = ("import sys; from motion_sensor.sequencing.filters import make_filter; "
             "assert 'filterpy.kalman' not in sys.modules; make_filter('kalman'); "
             "assert 'filterpy.kalman' in sys.modules")
     common_root = os.path.join(ROOT, "src", "motion_common")

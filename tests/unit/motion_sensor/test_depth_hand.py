@@ -1,17 +1,17 @@
 """Depth-camera hand tracking on rendered depth images of a hand with its forearm
-(motion_sensor.synthetic_depth): palm position along a known 3-D path, orientation, grab,
+(motion_sensor.testing.synthetic_depth): palm position along a known 3-D path, orientation, grab,
 working volume, second hand, and the topic device's handling of bad images."""
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from motion_sensor.depth_device import DepthMessage, DepthTopicDevice
-from motion_sensor.depth_hand import OPTICAL_TO_BODY, TRACKER_PARAMS, DepthHandTracker
-from motion_sensor.depth_image import DepthImageError, decode_depth, encode_depth_mm, intrinsics_from_camera_info
-from motion_sensor.device import DeviceRunner
+from motion_sensor.devices.depth_device import DepthMessage, DepthTopicDevice
+from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY, TRACKER_PARAMS, DepthHandTracker
+from motion_sensor.devices.depth_image import DepthImageError, decode_depth, encode_depth_mm, intrinsics_from_camera_info
+from motion_sensor.devices.device import DeviceRunner
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.synthetic_depth import DEFAULT_INTRINSICS as INTR
-from motion_sensor.synthetic_depth import HAND_UPRIGHT, HandPose, hand_path, render_hand
+from motion_sensor.testing.synthetic_depth import DEFAULT_INTRINSICS as INTR
+from motion_sensor.testing.synthetic_depth import HAND_UPRIGHT, HandPose, hand_path, render_hand
 
 K = [INTR.fx, 0, INTR.cx, 0, INTR.fy, INTR.cy, 0, 0, 1]
 NOISE = 0.0015   # sigma = 1.5 mm * z^2: a Kinect-like depth noise

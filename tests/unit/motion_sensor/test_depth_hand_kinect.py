@@ -11,18 +11,18 @@ import numpy as np
 import pytest
 
 from ..conftest import ROOT
-from motion_sensor import fakenect
-from motion_sensor.depth_hand import OPTICAL_TO_BODY
+from motion_sensor.devices import fakenect
+from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.kinect import FakenectKinectDevice, KinectDevice
-from motion_sensor.synthetic_depth import DEFAULT_INTRINSICS as INTR
-from motion_sensor.synthetic_depth import hand_path, render_hand
+from motion_sensor.devices.kinect import FakenectKinectDevice, KinectDevice
+from motion_sensor.testing.synthetic_depth import DEFAULT_INTRINSICS as INTR
+from motion_sensor.testing.synthetic_depth import hand_path, render_hand
 
 PYTHONPATH = os.pathsep.join(os.path.join(ROOT, "src", p) for p in ("motion_sensor", "motion_common"))
 
 PLAY = """
 import json, sys
-from motion_sensor.kinect import FakenectKinectDevice
+from motion_sensor.devices.kinect import FakenectKinectDevice
 from motion_sensor.errors import EndOfStream
 config = dict(FakenectKinectDevice.params.defaults(), **json.loads(sys.argv[1]))
 device = FakenectKinectDevice(config, clock=lambda: 0.0, sleep=lambda s: None)

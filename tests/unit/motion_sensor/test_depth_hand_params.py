@@ -9,8 +9,8 @@ import yaml
 
 from ..conftest import ROOT
 from motion_common.errors import ParameterError
-from motion_sensor.depth_device import DepthTopicDevice
-from motion_sensor.kinect import KinectDevice
+from motion_sensor.devices.depth_device import DepthTopicDevice
+from motion_sensor.devices.kinect import KinectDevice
 from .test_sensor_params import node_schema
 
 CONFIG = os.path.join(ROOT, "src", "motion_sensor", "config")

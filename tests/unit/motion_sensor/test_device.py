@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from motion_common.params import Param, ParamSchema
-from motion_sensor.device import (Backoff, DeviceRunner, HandDevice, empty_sample, reconnect_loop, sample_problem,
+from motion_sensor.devices.device import (Backoff, DeviceRunner, HandDevice, empty_sample, reconnect_loop, sample_problem,
                                   wait_until_ready)
 from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
 from motion_sensor.hand_sample import HandSample

@@ -9,13 +9,13 @@ import pytest
 
 from ..conftest import DATA, ROOT
 from motion_common.errors import ParameterError
-from motion_sensor.device import Backoff, DeviceRunner
+from motion_sensor.devices.device import Backoff, DeviceRunner
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.leap_client import LeapDevice
-from motion_sensor.leap_server import Faults, LeapReplayServer
-from motion_sensor.leap_v6 import read_recording
-from motion_sensor.replay import ReplayDevice
-from motion_sensor.spacemouse import SpaceMouseDevice
+from motion_sensor.devices.leap_client import LeapDevice
+from motion_sensor.devices.leap_server import Faults, LeapReplayServer
+from motion_sensor.devices.leap_v6 import read_recording
+from motion_sensor.devices.replay import ReplayDevice
+from motion_sensor.devices.spacemouse import SpaceMouseDevice
 from .test_device import FakeClock
 
 WAVE = os.path.join(DATA, "wave.jsonl.gz")

@@ -5,9 +5,9 @@ from hypothesis import given, settings, strategies as st
 from scipy.spatial.transform import Rotation
 
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.filters import MeanFilter, average_quaternions, make_filter
+from motion_sensor.sequencing.filters import MeanFilter, average_quaternions, make_filter
 from motion_sensor.hand_sample import HandSample
-from motion_sensor.sequencer import Sequencer, SequencerConfig
+from motion_sensor.sequencing.sequencer import Sequencer, SequencerConfig
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -264,7 +264,7 @@ def test_sequencer_output_is_always_finite_and_unit(steps, name):
 
 
 def test_bad_gesture_fields_are_dropped_and_counted():
-    from motion_sensor.sequencer import validate_sample
+    from motion_sensor.sequencing.sequencer import validate_sample
     good = HandSample(stamp=1.0, position=np.zeros(3), orientation=np.array([0, 0, 0, 1.0]),
                       grab_strength=0.5, pinch_strength=-1.0, index_tip=np.array([0.1, 0, 0]))
     assert validate_sample(good) is None
@@ -283,7 +283,7 @@ def test_sequencer_drops_non_numeric_fields_as_malformed():
 
 def test_the_plain_float_gram_matrix_is_numpys():
     from motion_common.float_list import float_list
-    from motion_sensor.filters import _gram
+    from motion_sensor.sequencing.filters import _gram
     rng = np.random.default_rng(11)
     quats = rng.normal(size=(10, 4))
     np.testing.assert_allclose(_gram(quats.tolist()), quats.T @ quats, rtol=0, atol=1e-14)

@@ -9,13 +9,13 @@ import pytest
 
 from ..conftest import DATA, ROOT
 from motion_common.errors import ParameterError
-from motion_sensor.dtw_classifier import DTWClassifier
-from motion_sensor.gesture_features import FeatureConfig, features
-from motion_sensor.gesture_frame import GestureFrame, frames_from_recording
-from motion_sensor.gesture_recognizer import DEFAULT_TEMPLATES, GestureRecognizer, load_classifier
-from motion_sensor.gesture_spotter import GestureSpotter
-from motion_sensor.gesture_templates import load_templates, read_path, save_template, write_atomic
-from motion_sensor.static_poses import StaticPoseDetector
+from motion_sensor.gestures.dtw_classifier import DTWClassifier
+from motion_sensor.gestures.gesture_features import FeatureConfig, features
+from motion_sensor.gestures.gesture_frame import GestureFrame, frames_from_recording
+from motion_sensor.gestures.gesture_recognizer import DEFAULT_TEMPLATES, GestureRecognizer, load_classifier
+from motion_sensor.gestures.gesture_spotter import GestureSpotter
+from motion_sensor.gestures.gesture_templates import load_templates, read_path, save_template, write_atomic
+from motion_sensor.gestures.static_poses import StaticPoseDetector
 
 sys.path.insert(0, os.path.join(ROOT, "tests", "tools"))
 import air_letters  # noqa: E402

@@ -9,8 +9,8 @@ import pytest
 
 from ..conftest import DATA
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.leap_client import FOCUSED, Backoff, ClockMapper, LeapClient
-from motion_sensor.leap_server import Faults, LeapReplayServer
+from motion_sensor.devices.leap_client import FOCUSED, Backoff, ClockMapper, LeapClient
+from motion_sensor.devices.leap_server import Faults, LeapReplayServer
 
 RECORDING = os.path.join(DATA, "wave.jsonl.gz")
 

@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 
 from ..conftest import DATA
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.leap_v6 import (LEAP_TO_REP103, frame_to_sample, palm_orientation, parse_message,
+from motion_sensor.devices.leap_v6 import (LEAP_TO_REP103, frame_to_sample, palm_orientation, parse_message,
                                    read_recording, select_primary)
 
 

@@ -4,7 +4,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.registration import Registration, register, umeyama
+from motion_sensor.registration.device_registration import Registration, register, umeyama
 
 
 def figure(u):

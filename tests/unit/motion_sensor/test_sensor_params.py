@@ -11,34 +11,19 @@ import yaml
 
 from ..conftest import ROOT
 from motion_common.errors import ParameterError
-from motion_sensor.filters import FILTER_PARAMS, FILTERS
-from motion_sensor.leap_client import LeapDevice
-from motion_sensor.replay import ReplayDevice
-from motion_sensor.sequencer import SEQUENCER_PARAMS, Sequencer, sequencer_setup
-from motion_sensor.spacemouse import SpaceMouseDevice
+from motion_sensor.sequencing.filters import FILTER_PARAMS, FILTERS
+from motion_sensor.devices.leap_client import LeapDevice
+from motion_sensor.devices.replay import ReplayDevice
+from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS, Sequencer, sequencer_setup
+from motion_sensor.devices.spacemouse import SpaceMouseDevice
 
 CONFIG = os.path.join(ROOT, "src", "motion_sensor", "config")
 
 
 def node_schema(device_cls):
-    """device_node.node_schema without importing rospy."""
-    import importlib.util
-    import sys
-    import types
-    for name in ("rospy", "diagnostic_msgs", "diagnostic_msgs.msg", "std_msgs", "std_msgs.msg", "motion_sensor.msg",
-                 "motion_common.ros_params"):
-        if name not in sys.modules:
-            module = types.ModuleType(name)
-            for attr in ("DiagnosticArray", "DiagnosticStatus", "KeyValue", "Bool", "hand", "load_private_params"):
-                setattr(module, attr, object)
-            sys.modules[name] = module
-    spec = importlib.util.spec_from_file_location(
-        "device_node_under_test", os.path.join(ROOT, "src", "motion_sensor", "motion_sensor", "device_node.py"),
-        submodule_search_locations=None)
-    module = importlib.util.module_from_spec(spec)
-    module.__package__ = "motion_sensor"
-    spec.loader.exec_module(module)
-    return module.node_schema(device_cls)
+    """The device node's schema, from its ROS-free declaration."""
+    from motion_sensor.devices.device_interface import node_schema as schema
+    return schema(device_cls)
 
 
 SCHEMAS = {"sequencer.yaml": lambda: SEQUENCER_PARAMS, "spacemouse.yaml": lambda: node_schema(SpaceMouseDevice),

@@ -7,8 +7,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.leap_client import Backoff
-from motion_sensor.spacemouse import (RateConfig, RateIntegrator, SpaceMouseDecoder, SpaceMouseReader,
+from motion_sensor.devices.leap_client import Backoff
+from motion_sensor.devices.spacemouse import (RateConfig, RateIntegrator, SpaceMouseDecoder, SpaceMouseReader,
                                       SpaceMouseState, find_device, format_report_line, read_report_log)
 
 from ..conftest import ROOT

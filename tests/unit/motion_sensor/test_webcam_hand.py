@@ -5,14 +5,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from motion_sensor.device import DeviceRunner
+from motion_sensor.devices.device import DeviceRunner
 from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
-from motion_sensor.hand_landmarks import (OPTICAL_TO_REP103, DetectedHand, GestureThresholds, Intrinsics,
+from motion_sensor.devices.hand_landmarks import (OPTICAL_TO_REP103, DetectedHand, GestureThresholds, Intrinsics,
                                           calibrate_depth_scale, estimate_depth, finger_curls, grab_strength,
                                           landmark_problem, palm_pose, pinch_strength)
-from motion_sensor.mediapipe_hands import HandDetector
-from motion_sensor.webcam_device import WebcamHandDevice, load_depth_scale
-from motion_sensor.webcam_hand import FrameLimits, WebcamHandTracker, frame_problem
+from motion_sensor.devices.mediapipe_hands import HandDetector
+from motion_sensor.devices.webcam_device import WebcamHandDevice, load_depth_scale
+from motion_sensor.devices.webcam_hand import FrameLimits, WebcamHandTracker, frame_problem
 
 K = Intrinsics(600.0, 600.0, 320.0, 240.0)
 # Finger bases (x along the fingers, y towards the thumb of a right hand, m) and segment lengths.

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from ..conftest import DATA, ROOT
-from motion_sensor.device import DeviceRunner
-from motion_sensor.mediapipe_hands import MediaPipeHandDetector
-from motion_sensor.webcam_device import WebcamHandDevice
-from motion_sensor.webcam_hand import WebcamHandTracker
+from motion_sensor.devices.device import DeviceRunner
+from motion_sensor.devices.mediapipe_hands import MediaPipeHandDetector
+from motion_sensor.devices.webcam_device import WebcamHandDevice
+from motion_sensor.devices.webcam_hand import WebcamHandTracker
 
 sys.path.insert(0, os.path.join(ROOT, "tests", "tools"))
 from hand_warp import HEIGHT, WIDTH, warped_sequence  # noqa: E402

@@ -9,7 +9,7 @@ import yaml
 
 from ..conftest import ROOT
 from motion_common.errors import ParameterError
-from motion_sensor.webcam_device import WebcamHandDevice
+from motion_sensor.devices.webcam_device import WebcamHandDevice
 from .test_sensor_params import node_schema
 
 CONFIG = os.path.join(ROOT, "src", "motion_sensor", "config", "webcam.yaml")

@@ -115,15 +115,15 @@ def _config(package, name):
 
 
 def _device_params(module, cls):
-    from motion_sensor.device_interface import node_schema
-    mod = __import__(f"motion_sensor.{module}", fromlist=[cls])
+    from motion_sensor.devices.device_interface import node_schema
+    mod = __import__(f"motion_sensor.devices.{module}", fromlist=[cls])
     return node_schema(getattr(mod, cls))
 
 
 def yaml_schema_pairs():
     from dashboard.config import DASHBOARD_PARAMETERS
     from motion_commander.config import TELEOP_PARAMETERS
-    from motion_sensor.sequencer import SEQUENCER_PARAMS
+    from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS
     return [
         (_config("motion_commander", "teleop.yaml"), TELEOP_PARAMETERS),
         (_config("motion_sensor", "sequencer.yaml"), SEQUENCER_PARAMS),
@@ -165,7 +165,7 @@ def test_python_api_gets_the_declared_defaults():
     the launched nodes get from their declarations."""
     from motion_commander.config import TELEOP_PARAMETERS, TeleopConfig, load_teleop_config
     from motion_commander.teleop_core import SafetyConfig
-    from motion_sensor.sequencer import SEQUENCER_PARAMS, SequencerConfig, sequencer_setup
+    from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS, SequencerConfig, sequencer_setup
 
     assert TeleopConfig() == load_teleop_config({})
     safety = SafetyConfig()

@@ -32,8 +32,8 @@ import numpy as np
 
 from motion_common.params import Param, ParamSchema, check_ordered
 
-from .dtw_classifier import Classification, DTWClassifier
-from .gesture_frame import GestureEvent, GestureFrame
+from motion_sensor.gestures.dtw_classifier import Classification, DTWClassifier
+from motion_sensor.gestures.gesture_frame import GestureEvent, GestureFrame
 
 MAX_KEPT_SEGMENTS = 200  # the newest segments kept for inspection; a node runs for hours
 

@@ -11,11 +11,11 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from .device import empty_sample
-from .camera_intrinsics import Intrinsics
-from .hand_landmarks import GestureThresholds, landmark_problem, palm_pose
-from .hand_sample import HandSample
-from .mediapipe_hands import HandDetector
+from motion_sensor.devices.device import empty_sample
+from motion_sensor.devices.camera_intrinsics import Intrinsics
+from motion_sensor.devices.hand_landmarks import GestureThresholds, landmark_problem, palm_pose
+from motion_sensor.hand_sample import HandSample
+from motion_sensor.devices.mediapipe_hands import HandDetector
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,5 @@
 """ROS edge of the depth-camera hand devices: the shared device node wrapper
-(``motion_sensor.device_node.DeviceNode``) plus, for the topic device, the image and
+(``motion_sensor.devices.device_node.DeviceNode``) plus, for the topic device, the image and
 CameraInfo subscribers that feed it; for the Kinect, the choice between the device and a
 fakenect dump (``~fakenect_dump``) made before the wrapper is built.
 """
@@ -8,9 +8,9 @@ import rospy
 from motion_common.ros_interface import subscriber
 from sensor_msgs.msg import CameraInfo, Image
 
-from .depth_device import DepthMessage, DepthTopicDevice
-from .device_node import DeviceNode, spin_device_node
-from .kinect import FakenectKinectDevice, KinectDevice
+from motion_sensor.devices.depth_device import DepthMessage, DepthTopicDevice
+from motion_sensor.devices.device_node import DeviceNode, spin_device_node
+from motion_sensor.devices.kinect import FakenectKinectDevice, KinectDevice
 
 
 def run_depth_node(node_name: str = "depth_hand_driver") -> None:

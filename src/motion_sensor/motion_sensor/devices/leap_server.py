@@ -16,7 +16,7 @@ from typing import List, Optional
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.server import serve
 
-from .errors import MotionSensorError
+from motion_sensor.errors import MotionSensorError
 
 
 @dataclass

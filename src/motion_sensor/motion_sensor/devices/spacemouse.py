@@ -1,6 +1,6 @@
 """3Dconnexion SpaceMouse over HID (hidapi): report decoding, rate-to-pose integration and a
 reconnecting reader, and SpaceMouseDevice, the SpaceMouse as a HandDevice (no rospy here;
-nodes/spacemouse_driver runs it through motion_sensor.device_node).
+nodes/spacemouse_driver runs it through motion_sensor.devices.device_node).
 
 A SpaceMouse is a rate device: the cap's deflection says how fast to move, not where the
 hand is. The rest of the stack expects hand poses (hand.msg), so RateIntegrator turns the
@@ -27,9 +27,9 @@ from scipy.spatial.transform import Rotation
 
 from motion_common.params import Param, ParamSchema
 
-from .device import Backoff, HandDevice, reconnect_loop
-from .errors import DeviceUnavailable, MotionSensorError
-from .hand_sample import HandSample
+from motion_sensor.devices.device import Backoff, HandDevice, reconnect_loop
+from motion_sensor.errors import DeviceUnavailable, MotionSensorError
+from motion_sensor.hand_sample import HandSample
 
 # (vendor id, product id) -> model, as listed by the spacenavd project; any other device is
 # given with vendor_id/product_id.

@@ -1,6 +1,6 @@
 """The hand detector interface and its MediaPipe Hands implementation.
 
-``HandDetector.detect(rgb)`` returns ``DetectedHand``s (``motion_sensor.hand_landmarks``);
+``HandDetector.detect(rgb)`` returns ``DetectedHand``s (``motion_sensor.devices.hand_landmarks``);
 everything after it is plain numpy. MediaPipe is imported only when a ``MediaPipeHandDetector``
 is built, so the maths and the device logic are tested with fake detectors without it.
 mediapipe 0.10.21 carries its models inside the wheel: nothing is downloaded at run time.
@@ -11,8 +11,8 @@ from typing import List
 
 import numpy as np
 
-from .errors import MotionSensorError
-from .hand_landmarks import NUM_LANDMARKS, DetectedHand
+from motion_sensor.errors import MotionSensorError
+from motion_sensor.devices.hand_landmarks import NUM_LANDMARKS, DetectedHand
 
 
 class HandDetector(abc.ABC):

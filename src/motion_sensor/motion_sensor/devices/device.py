@@ -5,7 +5,7 @@ A device (a Leap service, a SpaceMouse, a recording) is ONE class derived from
 
 - ``name``: its hardware id in /diagnostics (``leap``, ``spacemouse``, ``replay``);
 - ``params``: a ``ParamSchema`` of its own parameters (units, ranges); the node wrapper
-  (``motion_sensor.device_node``) merges it with the wrapper's (topic, frame_id, readiness,
+  (``motion_sensor.devices.device_node``) merges it with the wrapper's (topic, frame_id, readiness,
   backoff) and validates the node's private parameters against the union;
 - ``rate_hz``: None when ``read`` blocks until the next sample arrives (event-driven), or
   a rate at which the wrapper polls ``read`` (a rate device such as the SpaceMouse);
@@ -33,10 +33,10 @@ import numpy as np
 from motion_common.params import Param, ParamSchema
 from motion_common.rotations import is_unit_quaternion
 
-from .errors import DeviceUnavailable, EndOfStream, MotionSensorError
-from .hand_sample import HandSample
+from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
+from motion_sensor.hand_sample import HandSample
 
-_LOG = logging.getLogger("motion_sensor.device")
+_LOG = logging.getLogger("motion_sensor.devices.device")
 
 
 

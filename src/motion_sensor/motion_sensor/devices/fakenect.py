@@ -12,7 +12,7 @@ talking to a device. Two things stand between it and Python:
   load instead, in this order and ``RTLD_GLOBAL``: the stub, fakenect's libfreenect, then
   libfreenect_sync; the dynamic loader then binds libfreenect_sync's libfreenect.so.0.5 to
   the already-loaded fakenect library (same soname) and the missing symbol to the stub.
-  (``motion_sensor.kinect`` does this; one process can hold only one of real or fake.)
+  (``motion_sensor.devices.kinect`` does this; one process can hold only one of real or fake.)
 
 Dump format (fakenect's ``record``): ``INDEX.txt`` lists one file name per line;
 ``d-<seconds>-<timestamp>.pgm`` is a depth frame: a one-line ``P5 640 480 65535`` header
@@ -29,7 +29,7 @@ from typing import Iterable, Optional
 
 import numpy as np
 
-from .errors import MotionSensorError
+from motion_sensor.errors import MotionSensorError
 
 STUB_SOURCE = """\
 /* freenect_camera_to_world for fakenect, which lacks it (OpenKinect/libfreenect#509):

@@ -1,8 +1,8 @@
 """The one ROS node wrapper of every hand device (a ROS edge: it imports rospy, the
 device classes do not). A device executable is three lines:
 
-    from motion_sensor.device_node import run_device_node
-    from motion_sensor.leap_client import LeapDevice
+    from motion_sensor.devices.device_node import run_device_node
+    from motion_sensor.devices.leap_client import LeapDevice
     run_device_node(LeapDevice, "leap_driver")
 
 Its interface is ``device_interface.device_interface(device_cls, node_name)``: the
@@ -23,10 +23,10 @@ from motion_common.errors import ParameterError
 from motion_common.ros_interface import load_params, publisher, subscriber
 from motion_common.startup_heap import freeze_startup_heap
 
-from .device_interface import WRAPPER_PARAMS, device_interface, node_schema  # noqa: F401 (re-export)
-from .device import Backoff, DeviceRunner, HandDevice, wait_until_ready
-from .errors import MotionSensorError
-from .ros_conversions import sample_to_msg
+from motion_sensor.devices.device_interface import WRAPPER_PARAMS, device_interface, node_schema  # noqa: F401 (re-export)
+from motion_sensor.devices.device import Backoff, DeviceRunner, HandDevice, wait_until_ready
+from motion_sensor.errors import MotionSensorError
+from motion_sensor.ros_conversions import sample_to_msg
 
 class DeviceNode:
     """ROS wiring of one HandDevice through a DeviceRunner."""

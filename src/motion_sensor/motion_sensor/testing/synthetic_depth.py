@@ -17,7 +17,7 @@ from typing import List, Sequence, Tuple
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .camera_intrinsics import Intrinsics
+from motion_sensor.devices.camera_intrinsics import Intrinsics
 
 #: Fingers up (-y optical), back of the hand away from the camera (+z): columns x, y, z.
 HAND_UPRIGHT = np.column_stack(([0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]))

@@ -15,7 +15,7 @@ import numpy as np
 from motion_common.camera_model import CameraInfoError, Intrinsics
 from motion_common.camera_model import intrinsics_from_camera_info as _intrinsics_from_camera_info
 
-from .errors import MotionSensorError
+from motion_sensor.errors import MotionSensorError
 
 #: Depths beyond this are no measurement (m): no depth camera sees further.
 MAX_RANGE_M = 20.0

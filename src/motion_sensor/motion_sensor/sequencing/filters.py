@@ -8,7 +8,7 @@ import numpy as np
 from motion_common.float_list import float_list
 from motion_common.params import Param, ParamSchema
 
-from .errors import MotionSensorError
+from motion_sensor.errors import MotionSensorError
 
 
 def average_quaternions(quats) -> np.ndarray:

@@ -37,7 +37,7 @@ import numpy as np
 
 from motion_common.params import Param, ParamSchema, check_ordered
 
-from .gesture_frame import GestureEvent, GestureFrame
+from motion_sensor.gestures.gesture_frame import GestureEvent, GestureFrame
 
 STATIC_PARAMS = ParamSchema([
     Param("grab_on", 0.8, "", "grab strength that starts a fist", low=0.0, high=1.0),

@@ -16,9 +16,9 @@ from websockets.sync.client import connect
 
 from motion_common.params import Param, ParamSchema
 
-from .device import HAND_TYPE_PARAM, Backoff, HandDevice, empty_sample, hand_preference, reconnect_loop
-from .errors import DeviceUnavailable, MotionSensorError
-from .leap_v6 import LeapFrame, frame_to_sample, parse_message
+from motion_sensor.devices.device import HAND_TYPE_PARAM, Backoff, HandDevice, empty_sample, hand_preference, reconnect_loop
+from motion_sensor.errors import DeviceUnavailable, MotionSensorError
+from motion_sensor.devices.leap_v6 import LeapFrame, frame_to_sample, parse_message
 
 FOCUSED = '{"focused":true}'
 

@@ -15,13 +15,13 @@ from typing import List, Optional
 
 from motion_common.params import Param, ParamSchema
 
-from .dtw_classifier import CLASSIFIER_PARAMS, DTWClassifier
-from .gesture_frame import GestureEvent, GestureFrame
-from .gesture_spotter import SPOTTER_PARAMS, GestureSpotter
-from .gesture_templates import load_templates, templates_to_samples
-from .static_poses import STATIC_PARAMS, StaticPoseDetector
+from motion_sensor.gestures.dtw_classifier import CLASSIFIER_PARAMS, DTWClassifier
+from motion_sensor.gestures.gesture_frame import GestureEvent, GestureFrame
+from motion_sensor.gestures.gesture_spotter import SPOTTER_PARAMS, GestureSpotter
+from motion_sensor.gestures.gesture_templates import load_templates, templates_to_samples
+from motion_sensor.gestures.static_poses import STATIC_PARAMS, StaticPoseDetector
 
-DEFAULT_TEMPLATES = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "config", "gestures"))
+DEFAULT_TEMPLATES = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "config", "gestures"))
 
 RECOGNIZER_PARAMS = ParamSchema([
     Param("templates", DEFAULT_TEMPLATES, "", "template folder <dir>/<label>/<n>.csv ('' = no dynamic gestures)"),

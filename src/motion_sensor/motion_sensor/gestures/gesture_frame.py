@@ -16,9 +16,9 @@ from typing import List, Optional
 
 import numpy as np
 
-from .errors import MotionSensorError
-from .hand_sample import UNKNOWN, HandSample
-from .leap_v6 import frame_to_sample, parse_message
+from motion_sensor.errors import MotionSensorError
+from motion_sensor.hand_sample import UNKNOWN, HandSample
+from motion_sensor.devices.leap_v6 import frame_to_sample, parse_message
 
 
 @dataclass

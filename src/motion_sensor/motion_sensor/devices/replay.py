@@ -5,8 +5,8 @@ from typing import Iterable, Iterator, Tuple
 
 from motion_common.params import Param, ParamSchema
 
-from .device import HAND_TYPE_PARAM, HandDevice, empty_sample, hand_preference
-from .errors import EndOfStream, MotionSensorError
+from motion_sensor.devices.device import HAND_TYPE_PARAM, HandDevice, empty_sample, hand_preference
+from motion_sensor.errors import EndOfStream, MotionSensorError
 
 
 def replay_schedule(times: Iterable[float], rate: float = 1.0, start_offset: float = 0.0) -> Iterator[Tuple[int, float]]:
@@ -36,8 +36,8 @@ def read_csv(path: str):
 
     import numpy as np
 
-    from .errors import MotionSensorError
-    from .hand_sample import HandSample
+    from motion_sensor.errors import MotionSensorError
+    from motion_sensor.hand_sample import HandSample
 
     samples, rejected = [], []
     try:
@@ -75,7 +75,7 @@ def load_samples(path: str, primary: str = "right", frame_id: str = "leap", stri
     if path.endswith(".bag"):
         import rosbag
 
-        from .ros_conversions import msg_to_sample
+        from motion_sensor.ros_conversions import msg_to_sample
         samples = []
         try:
             with rosbag.Bag(path) as bag:
@@ -95,7 +95,7 @@ def load_samples(path: str, primary: str = "right", frame_id: str = "leap", stri
         for sample in rows:
             sample.frame_id = frame_id
         return [(sample.stamp, sample) for sample in rows], rejected
-    from .leap_v6 import frame_to_sample, read_recording
+    from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording
     try:
         recording = read_recording(path)
     except OSError as exc:

@@ -32,7 +32,7 @@ import numpy as np
 
 from motion_common.atomic_file import write_atomic
 
-from .errors import MotionSensorError
+from motion_sensor.errors import MotionSensorError
 
 LABEL_RE = re.compile(r"^[A-Za-z0-9_\-]+$")
 

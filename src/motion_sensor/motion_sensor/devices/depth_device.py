@@ -16,13 +16,13 @@ import numpy as np
 
 from motion_common.params import Param, ParamSchema
 
-from .depth_hand import TRACKER_PARAMS, DepthHandTracker
-from .camera_intrinsics import Intrinsics
-from .depth_image import DepthImageError, decode_depth, intrinsics_from_camera_info
+from motion_sensor.devices.depth_hand import TRACKER_PARAMS, DepthHandTracker
+from motion_sensor.devices.camera_intrinsics import Intrinsics
+from motion_sensor.devices.depth_image import DepthImageError, decode_depth, intrinsics_from_camera_info
 from motion_common.interface import Topic
 
-from .device import HandDevice, empty_sample
-from .hand_sample import HandSample
+from motion_sensor.devices.device import HandDevice, empty_sample
+from motion_sensor.hand_sample import HandSample
 
 IMAGE_CHECK_PARAMS = ParamSchema([
     Param("min_valid_fraction", 0.01, low=0, high=1,
@@ -73,7 +73,7 @@ class DepthHandDevice(HandDevice):
 class DepthTopicDevice(DepthHandDevice):
     """Hands from a depth image topic (16UC1 mm or 32FC1 m) and its CameraInfo.
 
-    The ROS edge (``motion_sensor.depth_node``) calls ``feed_info`` and ``feed_image`` from
+    The ROS edge (``motion_sensor.devices.depth_node``) calls ``feed_info`` and ``feed_image`` from
     its subscriber callbacks; ``read`` takes the next image (the newest when the tracker
     falls behind: older ones are dropped and counted as ``skipped``).
     """

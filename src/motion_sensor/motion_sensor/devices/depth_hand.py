@@ -39,8 +39,8 @@ from scipy.spatial.transform import Rotation
 
 from motion_common.params import Param, ParamSchema
 
-from .camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
-from .errors import MotionSensorError
+from motion_sensor.devices.camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
+from motion_sensor.errors import MotionSensorError
 
 TRACKER_PARAMS = ParamSchema([
     Param("min_depth_m", 0.35, unit="m", low=0.05, doc="working volume: nearest depth along the optical axis"),

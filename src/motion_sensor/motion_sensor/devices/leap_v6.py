@@ -14,8 +14,8 @@ from typing import List, Optional
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .errors import MotionSensorError
-from .hand_sample import HandSample
+from motion_sensor.errors import MotionSensorError
+from motion_sensor.hand_sample import HandSample
 
 # Rows map Leap (x right, y up, z toward operator) to REP 103 (x forward, y left, z up):
 # forward = -z_leap, left = -x_leap, up = y_leap. A proper rotation (det = +1).

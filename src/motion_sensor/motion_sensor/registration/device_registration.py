@@ -15,7 +15,7 @@ import numpy as np
 import yaml
 from dtaidistance import dtw_ndim
 
-from .errors import MotionSensorError
+from motion_sensor.errors import MotionSensorError
 
 
 @dataclass

@@ -13,7 +13,7 @@ The frames come from ``motion_common.video_capture`` (its counters join the devi
 
 Frames that fail to decode are counted (``decode_failures``) and skipped. Frames that
 decode but show nothing usable (black, saturated, no hand) go out as hands_num 0 (see
-``motion_sensor.webcam_hand``).
+``motion_sensor.devices.webcam_hand``).
 """
 import functools
 import os
@@ -25,12 +25,12 @@ import numpy as np
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema, read_yaml_file
 
-from .device import HandDevice
-from .errors import DeviceUnavailable, EndOfStream, MotionSensorError
-from .camera_intrinsics import Intrinsics
-from .hand_landmarks import GestureThresholds
-from .hand_sample import HandSample
-from .webcam_hand import FrameLimits, WebcamHandTracker
+from motion_sensor.devices.device import HandDevice
+from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
+from motion_sensor.devices.camera_intrinsics import Intrinsics
+from motion_sensor.devices.hand_landmarks import GestureThresholds
+from motion_sensor.hand_sample import HandSample
+from motion_sensor.devices.webcam_hand import FrameLimits, WebcamHandTracker
 
 
 def load_depth_scale(path: str) -> float:
@@ -182,7 +182,7 @@ class WebcamHandDevice(HandDevice):
 
 
 def _mediapipe_factory(config: dict):
-    from .mediapipe_hands import MediaPipeHandDetector
+    from motion_sensor.devices.mediapipe_hands import MediaPipeHandDetector
 
     return MediaPipeHandDetector(max_num_hands=config["max_num_hands"], model_complexity=config["model_complexity"],
                                  min_detection_confidence=config["min_detection_confidence"],

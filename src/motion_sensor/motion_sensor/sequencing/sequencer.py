@@ -23,14 +23,14 @@ from typing import Dict, Optional
 
 import numpy as np
 
-from .errors import MotionSensorError
+from motion_sensor.errors import MotionSensorError
 from motion_common.float_list import float_list
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema
 from motion_common.rotations import is_unit_quaternion, multiply_quaternions, quaternion_norm
 
-from .filters import FILTER_PARAMS, FILTERS, make_filter
-from .hand_sample import HandSample
+from motion_sensor.sequencing.filters import FILTER_PARAMS, FILTERS, make_filter
+from motion_sensor.hand_sample import HandSample
 
 # Drops that are the sequencer doing its job, not bad input: counted, never warned about.
 EXPECTED_DROPS = frozenset({"entry_trim", "exit_trim", "no_hand", "inactive_device"})

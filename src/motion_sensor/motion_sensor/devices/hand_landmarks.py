@@ -23,7 +23,7 @@ import numpy as np
 
 from motion_common.rotations import matrix_to_quaternion, with_positive_w
 
-from .camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
+from motion_sensor.devices.camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
 
 WRIST = 0
 THUMB_TIP = 4

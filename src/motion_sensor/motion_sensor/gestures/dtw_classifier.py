@@ -34,7 +34,7 @@ except ImportError:  # pragma: no cover - dtaidistance without its C extension
 
 from motion_common.params import Param, ParamSchema
 
-from .gesture_features import FEATURE_PARAMS, FeatureConfig, features
+from motion_sensor.gestures.gesture_features import FEATURE_PARAMS, FeatureConfig, features
 
 CLASSIFIER_PARAMS = ParamSchema([
     Param("window", 0.25, "fraction of length", "Sakoe-Chiba band half-width", low=0.0, high=1.0),

@@ -22,12 +22,12 @@ import numpy as np
 
 from motion_common.params import Param, ParamSchema
 
-from . import fakenect
-from .depth_device import IMAGE_CHECK_PARAMS, DepthHandDevice
-from .depth_hand import TRACKER_PARAMS
-from .camera_intrinsics import Intrinsics
-from .errors import DeviceUnavailable, EndOfStream, MotionSensorError
-from .hand_sample import HandSample
+import motion_sensor.devices.fakenect as fakenect
+from motion_sensor.devices.depth_device import IMAGE_CHECK_PARAMS, DepthHandDevice
+from motion_sensor.devices.depth_hand import TRACKER_PARAMS
+from motion_sensor.devices.camera_intrinsics import Intrinsics
+from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
+from motion_sensor.hand_sample import HandSample
 
 FREENECT_DEPTH_11BIT = 0
 FREENECT_DEPTH_MM = 5
