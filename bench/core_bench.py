@@ -6,6 +6,7 @@ IK alone as baseline. Pure Python, no ROS.
 Run: bench/run core_bench [--paths 20]
 Writes bench/results/core_bench.json and bench/results/core_bench.png.
 """
+
 import argparse
 import os
 import sys
@@ -18,24 +19,29 @@ for package in ("motion_sensor", "motion_commander"):
     sys.path.insert(0, os.path.join(ROOT, "src", package))
 
 from bench_common import RESULTS, write_results  # noqa: E402
-from motion_common.kinematics import RobotKinematics  # noqa: E402
-from motion_commander.teleop import TeleopMapper, make_clutch  # noqa: E402
 from motion_commander.config import load_teleop_config  # noqa: E402
+from motion_commander.teleop import TeleopMapper, make_clutch  # noqa: E402
 from motion_commander.teleop_core import TeleopCore  # noqa: E402
+from motion_common.kinematics import RobotKinematics  # noqa: E402
 from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording  # noqa: E402
 from motion_sensor.sequencing.sequencer import Sequencer  # noqa: E402
 
-HOMES = {"ur5e": [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0],
-         "ur10e": [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0],
-         "tx90": [0.0, 0.4, 1.6, 0.0, 1.14, 0.0]}
+HOMES = {
+    "ur5e": [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0],
+    "ur10e": [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0],
+    "tx90": [0.0, 0.4, 1.6, 0.0, 1.14, 0.0],
+}
 RECORDINGS = ["Waiting-110fps", "test-paddle-rightwards", "rollAndPitchCropped", "flapping", "wave"]
 
 
 def stats(samples):
     """p50/p99 in microseconds."""
     us = np.asarray(samples) * 1e6
-    return {"p50_us": round(float(np.percentile(us, 50)), 1), "p99_us": round(float(np.percentile(us, 99)), 1),
-            "n": int(len(us))}
+    return {
+        "p50_us": round(float(np.percentile(us, 50)), 1),
+        "p99_us": round(float(np.percentile(us, 99)), 1),
+        "n": int(len(us)),
+    }
 
 
 def ik_benchmark(robot, paths, rng):
@@ -61,22 +67,32 @@ def ik_benchmark(robot, paths, rng):
             start = time.perf_counter()
             kin.solve_ik(target, home)
             cold.append(time.perf_counter() - start)
-    return {"warm": stats(warm), "cold_baseline": stats(cold), "success_rate": successes / steps,
-            "steps": steps, "cold_over_warm_p50": round(float(np.median(cold) / np.median(warm)), 2)}, warm
+    return {
+        "warm": stats(warm),
+        "cold_baseline": stats(cold),
+        "success_rate": successes / steps,
+        "steps": steps,
+        "cold_over_warm_p50": round(float(np.median(cold) / np.median(warm)), 2),
+    }, warm
 
 
 def core_benchmark():
     """TeleopCore.on_hand_pose per frame on the sequenced real recordings (UR5e)."""
     kin = RobotKinematics(os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf"))
     import yaml
+
     with open(os.path.join(ROOT, "src", "motion_commander", "config", "teleop.yaml"), encoding="utf-8") as fh:
         config = load_teleop_config(yaml.safe_load(fh))
     per_frame, ik_only = [], []
     for name in RECORDINGS:
         recording = read_recording(os.path.join(ROOT, "tests", "data", f"{name}.jsonl.gz"))
         # The session's own configuration (teleop.yaml: speed ratio, limits, acceleration).
-        core = TeleopCore(kin, TeleopMapper(config.speed_ratio), make_clutch(config.engage, config.steady_frames,
-                                                                          config.lost_after), config.safety)
+        core = TeleopCore(
+            kin,
+            TeleopMapper(config.speed_ratio),
+            make_clutch(config.engage, config.steady_frames, config.lost_after),
+            config.safety,
+        )
         core.on_joint_state(HOMES["ur5e"])
         sequencer = Sequencer()
         for frame in recording.frames:
@@ -93,16 +109,21 @@ def core_benchmark():
                 start = time.perf_counter()
                 kin.solve_ik(kin.forward(command.joints), command.joints)
                 ik_only.append(time.perf_counter() - start)
-    return {"per_frame": stats(per_frame), "ik_only_baseline": stats(ik_only),
-            "per_frame_over_ik_p50": round(float(np.median(per_frame) / np.median(ik_only)), 2),
-            "recordings": RECORDINGS}, per_frame
+    return {
+        "per_frame": stats(per_frame),
+        "ik_only_baseline": stats(ik_only),
+        "per_frame_over_ik_p50": round(float(np.median(per_frame) / np.median(ik_only)), 2),
+        "recordings": RECORDINGS,
+    }, per_frame
 
 
 def plot(ik_samples, core_samples, path):
     """Histogram of per-step costs."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(figsize=(8, 4.5))
     bins = np.logspace(np.log10(5), np.log10(2000), 60)
     for label, samples in list(ik_samples.items()) + [("TeleopCore per frame (ur5e)", core_samples)]:

@@ -12,6 +12,7 @@ palm surface lies a constant half palm thickness in front of the centre).
 Run: bench/run depth_hand_bench [--frames 300] [--seed 1] [--noise 0.0015]
 Writes bench/results/depth_hand_bench.json and depth_hand_path.png.
 """
+
 import argparse
 import os
 import sys
@@ -35,14 +36,19 @@ from motion_sensor.testing.synthetic_depth import hand_path, render_hand  # noqa
 
 def stats_ms(samples):
     ms = np.asarray(samples) * 1e3
-    return {"p50_ms": round(float(np.percentile(ms, 50)), 3), "p99_ms": round(float(np.percentile(ms, 99)), 3),
-            "max_ms": round(float(ms.max()), 3)}
+    return {
+        "p50_ms": round(float(np.percentile(ms, 50)), 3),
+        "p99_ms": round(float(np.percentile(ms, 99)), 3),
+        "max_ms": round(float(ms.max()), 3),
+    }
 
 
 def plot(truth, seen, path):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, axes = plt.subplots(1, 4, figsize=(16, 4))
     frames = np.arange(len(truth))
     for i, name in enumerate("xyz"):
@@ -68,7 +74,9 @@ def main():
     parser.add_argument("--frames", type=int, default=300, help="frames along the path (default 300: 10 s at 30 Hz)")
     parser.add_argument("--seed", type=int, default=1, help="path and noise seed")
     parser.add_argument("--noise", type=float, default=0.0015, help="depth noise sigma per z^2 (m/m^2)")
-    parser.add_argument("--repeats", type=int, default=3, help="timing passes over the frames (the best of each is kept)")
+    parser.add_argument(
+        "--repeats", type=int, default=3, help="timing passes over the frames (the best of each is kept)"
+    )
     args = parser.parse_args()
 
     poses = hand_path(args.frames, seed=args.seed)
@@ -120,13 +128,16 @@ def main():
     plot(truth, seen - offset, png)
     cost, base = stats_ms(costs), stats_ms(baseline)
     results = {
-        "frames": args.frames, "image": "640x480 16UC1", "seed": args.seed, "noise_sigma_per_m2": args.noise,
+        "frames": args.frames,
+        "image": "640x480 16UC1",
+        "seed": args.seed,
+        "noise_sigma_per_m2": args.noise,
         "found_fraction": round(float(np.mean(found)), 4),
         "per_frame_decode_and_track": cost,
         "baseline_distance_transform_full_image": base,
         "ratio_p50_vs_baseline": round(cost["p50_ms"] / base["p50_ms"], 2),
         "ratio_p99_vs_baseline": round(cost["p99_ms"] / base["p99_ms"], 2),
-        "position_rms_mm": round(float(np.sqrt(np.mean(residual ** 2))) * 1000, 2),
+        "position_rms_mm": round(float(np.sqrt(np.mean(residual**2))) * 1000, 2),
         "position_p95_mm": round(float(np.percentile(residual, 95)) * 1000, 2),
         "position_max_mm": round(float(residual.max()) * 1000, 2),
         "constant_offset_mm": [round(float(v) * 1000, 2) for v in offset],
@@ -141,12 +152,18 @@ def main():
     print("=== depth hand bench ===")
     print(f"frames                    : {args.frames} (hand found in {results['found_fraction'] * 100:.1f} %)")
     print(f"per frame (decode+track)  : p50 {cost['p50_ms']} ms, p99 {cost['p99_ms']} ms (goal p99 <= 10 ms)")
-    print(f"baseline (bare dist. tr.) : p50 {base['p50_ms']} ms, p99 {base['p99_ms']} ms; "
-          f"ratio p50 {results['ratio_p50_vs_baseline']}, p99 {results['ratio_p99_vs_baseline']}")
-    print(f"palm position error       : RMS {results['position_rms_mm']} mm, p95 {results['position_p95_mm']} mm, "
-          f"max {results['position_max_mm']} mm (goal RMS <= 10 mm), constant offset {results['constant_offset_mm']} mm")
-    print(f"orientation error         : fingers mean/max {results['fingers_axis_error_deg_mean_max']} deg, "
-          f"palm normal {results['palm_normal_error_deg_mean_max']} deg")
+    print(
+        f"baseline (bare dist. tr.) : p50 {base['p50_ms']} ms, p99 {base['p99_ms']} ms; "
+        f"ratio p50 {results['ratio_p50_vs_baseline']}, p99 {results['ratio_p99_vs_baseline']}"
+    )
+    print(
+        f"palm position error       : RMS {results['position_rms_mm']} mm, p95 {results['position_p95_mm']} mm, "
+        f"max {results['position_max_mm']} mm (goal RMS <= 10 mm), constant offset {results['constant_offset_mm']} mm"
+    )
+    print(
+        f"orientation error         : fingers mean/max {results['fingers_axis_error_deg_mean_max']} deg, "
+        f"palm normal {results['palm_normal_error_deg_mean_max']} deg"
+    )
     print(f"plot                      : {png}")
     print(f"goals met                 : {results['goals_met']}")
     return 0 if results["goals_met"] else 1

@@ -5,15 +5,16 @@ is the same shape, rotated, translated, scaled and performed at a different spee
 Run: bench/run dtw_bench [--trials 20]
 Writes bench/results/dtw_bench.json. Goals: error <= 2 mm and <= 1 deg; <= 50 ms at 1000 frames.
 """
+
 import argparse
 import os
 import sys
 import time
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from bench_common import write_results
-from scipy.spatial.transform import Rotation
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_sensor"))
@@ -22,8 +23,9 @@ from motion_sensor.registration.device_registration import register  # noqa: E40
 
 def shape(u):
     """A 3D Lissajous figure, metres, u in [0, 1]."""
-    return np.column_stack([0.10 * np.sin(2 * np.pi * u), 0.07 * np.sin(4 * np.pi * u + 0.5),
-                            0.05 * np.sin(6 * np.pi * u + 1.0)])
+    return np.column_stack(
+        [0.10 * np.sin(2 * np.pi * u), 0.07 * np.sin(4 * np.pi * u + 0.5), 0.05 * np.sin(6 * np.pi * u + 1.0)]
+    )
 
 
 def irregular_times(n, duration, rng):
@@ -63,17 +65,27 @@ def main():
     rows = []
     for index in range(args.trials):
         rows.append(trial(rng, args.frames))
-        print(f"[{index + 1}/{args.trials}] max error {rows[-1][0] * 1000:.3f} mm, angle {rows[-1][1]:.3f} deg, "
-              f"{rows[-1][2] * 1000:.1f} ms", flush=True)
+        print(
+            f"[{index + 1}/{args.trials}] max error {rows[-1][0] * 1000:.3f} mm, angle {rows[-1][1]:.3f} deg, "
+            f"{rows[-1][2] * 1000:.1f} ms",
+            flush=True,
+        )
     errors, angles, seconds, scale_errors = (np.array(c) for c in zip(*rows))
-    results = {"frames": args.frames, "trials": args.trials,
-               "max_position_error_mm": {"p50": round(float(np.median(errors)) * 1000, 3),
-                                         "max": round(float(errors.max()) * 1000, 3)},
-               "rotation_error_deg": {"p50": round(float(np.median(angles)), 4), "max": round(float(angles.max()), 4)},
-               "relative_scale_error": {"max": round(float(scale_errors.max()), 5)},
-               "time_ms": {"p50": round(float(np.median(seconds)) * 1000, 2),
-                           "p99": round(float(np.percentile(seconds, 99)) * 1000, 2)},
-               "goals": {"error_mm": 2.0, "angle_deg": 1.0, "time_ms": 50.0}}
+    results = {
+        "frames": args.frames,
+        "trials": args.trials,
+        "max_position_error_mm": {
+            "p50": round(float(np.median(errors)) * 1000, 3),
+            "max": round(float(errors.max()) * 1000, 3),
+        },
+        "rotation_error_deg": {"p50": round(float(np.median(angles)), 4), "max": round(float(angles.max()), 4)},
+        "relative_scale_error": {"max": round(float(scale_errors.max()), 5)},
+        "time_ms": {
+            "p50": round(float(np.median(seconds)) * 1000, 2),
+            "p99": round(float(np.percentile(seconds, 99)) * 1000, 2),
+        },
+        "goals": {"error_mm": 2.0, "angle_deg": 1.0, "time_ms": 50.0},
+    }
     write_results("dtw_bench", results)
 
 

@@ -27,6 +27,7 @@ Run: bench/run e2e_latency [--recordings NAME ...] [--min-commands 1000] [--floo
                            [--breakdown] [--netns]
 Writes bench/results/e2e_latency.json and bench/results/e2e_latency.png.
 """
+
 import argparse
 import json
 import math
@@ -58,6 +59,7 @@ def recording_path(name):
 def passes_for(name, min_commands):
     """Passes over ``name`` that give at least ``min_commands`` commands."""
     from motion_sensor.devices.replay import load_samples
+
     samples, _ = load_samples(recording_path(name))
     per_pass = max(1, sum(1 for _, s in samples if s.hands_num) - UNSENT_PER_PASS)
     return max(1, math.ceil(min_commands / per_pass))
@@ -67,13 +69,22 @@ def run_session(recording, repeat=1):
     """Run one teleop session on ``recording`` (``repeat`` passes); return its summary dict."""
     out = tempfile.mkdtemp(prefix="e2e-")
     env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}")
-    cmd = ["roslaunch", "-p", str(PORT), os.path.join(ROOT, "src", "motion_bringup", "launch", "teleop_sim.launch"),
-           f"recording:={recording_path(recording)}", f"output_dir:={out}", f"repeat:={repeat}"]
+    cmd = [
+        "roslaunch",
+        "-p",
+        str(PORT),
+        os.path.join(ROOT, "src", "motion_bringup", "launch", "teleop_sim.launch"),
+        f"recording:={recording_path(recording)}",
+        f"output_dir:={out}",
+        f"repeat:={repeat}",
+    ]
     subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=600, check=False)
     path = os.path.join(out, "session_summary.json")
     if not os.path.exists(path):
-        raise RuntimeError(f"the session on {recording} wrote no summary; run scripts/teleop_sim "
-                           f"recording:={recording_path(recording)} to see why")
+        raise RuntimeError(
+            f"the session on {recording} wrote no summary; run scripts/teleop_sim "
+            f"recording:={recording_path(recording)} to see why"
+        )
     with open(path, encoding="utf-8") as fh:
         return json.load(fh)
 
@@ -83,9 +94,11 @@ class FloorMaster:
 
     def __enter__(self):
         self.env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT + 1}")
-        self.core = subprocess.Popen(["roscore", "-p", str(PORT + 1)], env=self.env, stdout=subprocess.DEVNULL,
-                                     stderr=subprocess.DEVNULL)
+        self.core = subprocess.Popen(
+            ["roscore", "-p", str(PORT + 1)], env=self.env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        )
         import rosgraph
+
         master = rosgraph.Master("/e2e_bench", master_uri=self.env["ROS_MASTER_URI"])
         for _ in range(300):
             try:
@@ -108,9 +121,12 @@ def measure_floors(master, count):
     figures = {}
     for variant in ("floor", "sync"):
         figures[variant] = master.floor(count, variant)["sensor->server"]
-    print(f"    floor: p50={figures['floor']['p50']} ms p99={figures['floor']['p99']} ms; "
-          f"sync floor: p50={figures['sync']['p50']} ms p99={figures['sync']['p99']} ms "
-          f"(n={figures['floor']['n']} each)", flush=True)
+    print(
+        f"    floor: p50={figures['floor']['p50']} ms p99={figures['floor']['p99']} ms; "
+        f"sync floor: p50={figures['sync']['p50']} ms p99={figures['sync']['p99']} ms "
+        f"(n={figures['floor']['n']} each)",
+        flush=True,
+    )
     return figures
 
 
@@ -122,21 +138,34 @@ def bracket(before, after, variant):
 def measure_netns(name, same_machine, repeat):
     """``name`` across two network namespaces; its figures and ratios to ``same_machine``."""
     import two_machines
+
     reason = two_machines.netns_unavailable()
     if reason:
         print(f"two machines (netns): skipped, {reason}", flush=True)
         return {"skipped": reason}
     print(f"two machines (netns) on {name}...", flush=True)
-    summary = two_machines.run_monitored_session(recording_path(name), tempfile.mkdtemp(prefix="e2e-netns-"),
-                                                 repeat=repeat)
-    row = {key: summary[key] for key in ("latency_p50_ms", "latency_p99_ms", "latency_samples", "frames_dropped",
-                                         "stage_latency_ms")}
-    row.update(recording=name, vs_same_machine_p50=round(summary["latency_p50_ms"] / same_machine["latency_p50_ms"], 2),
-               vs_same_machine_p99=round(summary["latency_p99_ms"] / same_machine["latency_p99_ms"], 2))
-    print(f"    sensor->driver p50 {row['latency_p50_ms']} ms, p99 {row['latency_p99_ms']} ms, "
-          f"stages {row['stage_latency_ms']}", flush=True)
-    print(f"    vs same machine: p50 x{row['vs_same_machine_p50']}, p99 x{row['vs_same_machine_p99']} "
-          f"({row['latency_samples']} commands; frames dropped {row['frames_dropped']})", flush=True)
+    summary = two_machines.run_monitored_session(
+        recording_path(name), tempfile.mkdtemp(prefix="e2e-netns-"), repeat=repeat
+    )
+    row = {
+        key: summary[key]
+        for key in ("latency_p50_ms", "latency_p99_ms", "latency_samples", "frames_dropped", "stage_latency_ms")
+    }
+    row.update(
+        recording=name,
+        vs_same_machine_p50=round(summary["latency_p50_ms"] / same_machine["latency_p50_ms"], 2),
+        vs_same_machine_p99=round(summary["latency_p99_ms"] / same_machine["latency_p99_ms"], 2),
+    )
+    print(
+        f"    sensor->driver p50 {row['latency_p50_ms']} ms, p99 {row['latency_p99_ms']} ms, "
+        f"stages {row['stage_latency_ms']}",
+        flush=True,
+    )
+    print(
+        f"    vs same machine: p50 x{row['vs_same_machine_p50']}, p99 x{row['vs_same_machine_p99']} "
+        f"({row['latency_samples']} commands; frames dropped {row['frames_dropped']})",
+        flush=True,
+    )
     return row
 
 
@@ -145,13 +174,18 @@ def serialisation_costs(rounds=2000):
     from io import BytesIO
 
     from geometry_msgs.msg import PoseStamped
+
     from motion_commander.msg import CommandTrace
     from motion_commander.srv import commanderRequest, commanderResponse
     from motion_sensor.msg import hand
-    messages = {"hand": hand(hands_num=1, hand_type=["right"]), "PoseStamped": PoseStamped(),
-                "commander request": commanderRequest(command_index=5, joints=[0.1] * 6),
-                "commander response": commanderResponse(joints=[0.1] * 6, position=[0.1] * 3, orientation=[0.0] * 4),
-                "CommandTrace": CommandTrace()}
+
+    messages = {
+        "hand": hand(hands_num=1, hand_type=["right"]),
+        "PoseStamped": PoseStamped(),
+        "commander request": commanderRequest(command_index=5, joints=[0.1] * 6),
+        "commander response": commanderResponse(joints=[0.1] * 6, position=[0.1] * 3, orientation=[0.0] * 4),
+        "CommandTrace": CommandTrace(),
+    }
     costs = {}
     for name, msg in messages.items():
         buffer = BytesIO()
@@ -172,9 +206,13 @@ def idle_wake_penalty(gap=0.009, lead=0.0015):
     (the node's default, teleop.yaml prepare_lead_s). The three run interleaved, frame by
     frame, so the machine's drift touches them alike: p50/p99 in us."""
     from transport_floor import _core, recorded_hands
+
     path = recorded_hands()
-    variants = {"hot loop": None, f"after {gap * 1000:.0f} ms idle, prepared right after the command": 0.0,
-                f"after {gap * 1000:.0f} ms idle, prepared {lead * 1000:g} ms before the frame": lead}
+    variants = {
+        "hot loop": None,
+        f"after {gap * 1000:.0f} ms idle, prepared right after the command": 0.0,
+        f"after {gap * 1000:.0f} ms idle, prepared {lead * 1000:g} ms before the frame": lead,
+    }
     cores = {label: _core() for label in variants}
     costs = {label: [] for label in variants}
     stamp = 1000.0
@@ -200,8 +238,11 @@ def idle_wake_penalty(gap=0.009, lead=0.0015):
     figures = {}
     for label, values in costs.items():
         us = np.asarray(values) * 1e6
-        figures[label] = {"p50_us": round(float(np.percentile(us, 50)), 1),
-                          "p99_us": round(float(np.percentile(us, 99)), 1), "n": len(values)}
+        figures[label] = {
+            "p50_us": round(float(np.percentile(us, 50)), 1),
+            "p99_us": round(float(np.percentile(us, 99)), 1),
+            "n": len(values),
+        }
     return figures
 
 
@@ -236,8 +277,9 @@ def garbage_collector_pauses():
     core node's imports and robot model, before and after freeze_startup_heap(). A long
     session runs into such collections as long-lived objects accumulate."""
     urdf = os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf")
-    output = subprocess.run([sys.executable, "-c", f"URDF = {urdf!r}\n" + GC_PROBE], check=True,
-                            capture_output=True, text=True).stdout
+    output = subprocess.run(
+        [sys.executable, "-c", f"URDF = {urdf!r}\n" + GC_PROBE], check=True, capture_output=True, text=True
+    ).stdout
     return json.loads(output.strip().splitlines()[-1])
 
 
@@ -252,12 +294,20 @@ def breakdown(master, count):
     for variant, hops in rows.items():
         server = hops["sensor->server"]
         base = rows["floor"]["sensor->server"] if variant == "sync" else sync
-        table[variant] = {"what": VARIANTS[variant], "p50": server["p50"], "p99": server["p99"],
-                          "added_p50": None if variant in ("floor",) else round(server["p50"] - base["p50"], 3),
-                          "added_p99": None if variant in ("floor",) else round(server["p99"] - base["p99"], 3),
-                          "hops": hops}
-    return {"variants": table, "serialisation_us": serialisation_costs(), "core_idle_wake": idle_wake_penalty(),
-            "gc_pause_ms": garbage_collector_pauses()}
+        table[variant] = {
+            "what": VARIANTS[variant],
+            "p50": server["p50"],
+            "p99": server["p99"],
+            "added_p50": None if variant in ("floor",) else round(server["p50"] - base["p50"], 3),
+            "added_p99": None if variant in ("floor",) else round(server["p99"] - base["p99"], 3),
+            "hops": hops,
+        }
+    return {
+        "variants": table,
+        "serialisation_us": serialisation_costs(),
+        "core_idle_wake": idle_wake_penalty(),
+        "gc_pause_ms": garbage_collector_pauses(),
+    }
 
 
 def print_breakdown(result):
@@ -274,22 +324,30 @@ def print_breakdown(result):
 def plot(results, path):
     """Per recording: session p50/p99 against the bracketing floors; the breakdown bars."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     names = [n for n in results["sessions"]]
     panels = 2 if "breakdown" in results else 1
     fig, axes = plt.subplots(1, panels, figsize=(6.5 * panels, 4.5), squeeze=False)
     ax = axes[0][0]
     x = np.arange(len(names))
-    for offset, (label, key, floor_key) in enumerate((("session", None, None), ("floor (queued)", "floor", None),
-                                                      ("floor (sync)", "sync_floor", None))):
-        p50 = [results["sessions"][n]["latency_p50_ms"] if key is None else results["sessions"][n][key]["p50"]
-               for n in names]
-        p99 = [results["sessions"][n]["latency_p99_ms"] if key is None else results["sessions"][n][key]["p99"]
-               for n in names]
+    for offset, (label, key, floor_key) in enumerate(
+        (("session", None, None), ("floor (queued)", "floor", None), ("floor (sync)", "sync_floor", None))
+    ):
+        p50 = [
+            results["sessions"][n]["latency_p50_ms"] if key is None else results["sessions"][n][key]["p50"]
+            for n in names
+        ]
+        p99 = [
+            results["sessions"][n]["latency_p99_ms"] if key is None else results["sessions"][n][key]["p99"]
+            for n in names
+        ]
         bars = ax.bar(x + (offset - 1) * 0.27, p50, 0.25, label=f"{label} p50")
-        ax.scatter(x + (offset - 1) * 0.27, p99, marker="_", s=300, color=bars.patches[0].get_facecolor(),
-                   label=f"{label} p99")
+        ax.scatter(
+            x + (offset - 1) * 0.27, p99, marker="_", s=300, color=bars.patches[0].get_facecolor(), label=f"{label} p99"
+        )
     ax.set_xticks(x, [n.replace("-", "-\n", 1) for n in names], fontsize=8)
     ax.set_ylabel("sensor -> driver latency [ms]")
     ax.set_title("Teleop session against its transport floor (same run)")
@@ -311,13 +369,17 @@ def plot(results, path):
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--recordings", nargs="+", default=DEFAULT, help="names in tests/data (without .jsonl.gz)")
-    parser.add_argument("--min-commands", type=int, default=1000,
-                        help="commands per session figure: the recording is replayed in passes until reached "
-                             "(default 1000)")
+    parser.add_argument(
+        "--min-commands",
+        type=int,
+        default=1000,
+        help="commands per session figure: the recording is replayed in passes until reached (default 1000)",
+    )
     parser.add_argument("--floor-count", type=int, default=1100, help="commands through each floor run")
     parser.add_argument("--breakdown", action="store_true", help="also measure where the time goes (~1.5 min)")
-    parser.add_argument("--netns", action="store_true",
-                        help="also play each recording across two network namespaces (root)")
+    parser.add_argument(
+        "--netns", action="store_true", help="also play each recording across two network namespaces (root)"
+    )
     args = parser.parse_args()
     results = {"sessions": {}, "goal_vs_floor": GOAL}
     total = len(args.recordings)
@@ -332,28 +394,47 @@ def main():
             print(f"    floors after session {index}...", flush=True)
             after = measure_floors(master, args.floor_count)
             results["floors"].append(after)
-            row = {key: summary[key] for key in ("frames_in", "frames_out", "commands_sent", "latency_p50_ms",
-                                                  "latency_p99_ms", "stage_latency_ms", "tracking_error_rms_mm",
-                                                  "frames_dropped", "latency_samples")}
+            row = {
+                key: summary[key]
+                for key in (
+                    "frames_in",
+                    "frames_out",
+                    "commands_sent",
+                    "latency_p50_ms",
+                    "latency_p99_ms",
+                    "stage_latency_ms",
+                    "tracking_error_rms_mm",
+                    "frames_dropped",
+                    "latency_samples",
+                )
+            }
             row["passes"] = repeat
             row["floor"], row["sync_floor"] = bracket(before, after, "floor"), bracket(before, after, "sync")
             for key, floor in (("vs_floor", row["floor"]), ("vs_sync_floor", row["sync_floor"])):
                 row[key] = {q: round(summary[f"latency_{q}_ms"] / floor[q], 2) for q in ("p50", "p99")}
             results["sessions"][name] = row
             before = after
-            print(f"    sensor->driver p50 {row['latency_p50_ms']} ms, p99 {row['latency_p99_ms']} ms, "
-                  f"stages {row['stage_latency_ms']}", flush=True)
-            print(f"    vs floor (mean of before/after): p50 x{row['vs_floor']['p50']}, p99 x{row['vs_floor']['p99']}; "
-                  f"vs sync floor: p50 x{row['vs_sync_floor']['p50']}, p99 x{row['vs_sync_floor']['p99']} "
-                  f"({row['latency_samples']} commands in {repeat} passes; frames dropped {row['frames_dropped']}, "
-                  f"{row['frames_dropped'] / repeat:.0f} per pass)", flush=True)
+            print(
+                f"    sensor->driver p50 {row['latency_p50_ms']} ms, p99 {row['latency_p99_ms']} ms, "
+                f"stages {row['stage_latency_ms']}",
+                flush=True,
+            )
+            print(
+                f"    vs floor (mean of before/after): p50 x{row['vs_floor']['p50']}, p99 x{row['vs_floor']['p99']}; "
+                f"vs sync floor: p50 x{row['vs_sync_floor']['p50']}, p99 x{row['vs_sync_floor']['p99']} "
+                f"({row['latency_samples']} commands in {repeat} passes; frames dropped {row['frames_dropped']}, "
+                f"{row['frames_dropped'] / repeat:.0f} per pass)",
+                flush=True,
+            )
             if row["latency_samples"] < args.min_commands:
                 print(f"    note: only {row['latency_samples']} commands (< {args.min_commands})", flush=True)
         if args.breakdown:
             results["breakdown"] = breakdown(master, args.floor_count)
     if args.netns:
-        results["netns"] = {name: measure_netns(name, results["sessions"][name], results["sessions"][name]["passes"])
-                            for name in args.recordings}
+        results["netns"] = {
+            name: measure_netns(name, results["sessions"][name], results["sessions"][name]["passes"])
+            for name in args.recordings
+        }
     sessions = results["sessions"].values()
     results["worst_vs_floor"] = {q: max(r["vs_floor"][q] for r in sessions) for q in ("p50", "p99")}
     results["worst_vs_sync_floor"] = {q: max(r["vs_sync_floor"][q] for r in sessions) for q in ("p50", "p99")}
@@ -363,20 +444,26 @@ def main():
     print()
     print("=== end-to-end latency summary ===")
     for name, row in results["sessions"].items():
-        print(f"{name}: sensor->driver p50 {row['latency_p50_ms']} ms, p99 {row['latency_p99_ms']} ms "
-              f"({row['latency_samples']} commands); floor: p50={row['floor']['p50']} p99={row['floor']['p99']}; "
-              f"x{row['vs_floor']['p50']} / x{row['vs_floor']['p99']} (sync floor "
-              f"x{row['vs_sync_floor']['p50']} / x{row['vs_sync_floor']['p99']})")
+        print(
+            f"{name}: sensor->driver p50 {row['latency_p50_ms']} ms, p99 {row['latency_p99_ms']} ms "
+            f"({row['latency_samples']} commands); floor: p50={row['floor']['p50']} p99={row['floor']['p99']}; "
+            f"x{row['vs_floor']['p50']} / x{row['vs_floor']['p99']} (sync floor "
+            f"x{row['vs_sync_floor']['p50']} / x{row['vs_sync_floor']['p99']})"
+        )
     worst, worst_sync = results["worst_vs_floor"], results["worst_vs_sync_floor"]
-    print(f"worst session vs floor: p50 x{worst['p50']}, p99 x{worst['p99']} (goal x{GOAL['p50']:g} / x{GOAL['p99']:g}); "
-          f"vs sync floor: p50 x{worst_sync['p50']}, p99 x{worst_sync['p99']}")
+    print(
+        f"worst session vs floor: p50 x{worst['p50']}, p99 x{worst['p99']} (goal x{GOAL['p50']:g} / x{GOAL['p99']:g}); "
+        f"vs sync floor: p50 x{worst_sync['p50']}, p99 x{worst_sync['p99']}"
+    )
     if args.breakdown:
         print_breakdown(results["breakdown"])
     for name, row in results.get("netns", {}).items():
         if "skipped" not in row:
-            print(f"two machines (netns), {name}: sensor->driver p50 {row['latency_p50_ms']} ms, "
-                  f"p99 {row['latency_p99_ms']} ms; vs same machine p50 x{row['vs_same_machine_p50']}, "
-                  f"p99 x{row['vs_same_machine_p99']}")
+            print(
+                f"two machines (netns), {name}: sensor->driver p50 {row['latency_p50_ms']} ms, "
+                f"p99 {row['latency_p99_ms']} ms; vs same machine p50 x{row['vs_same_machine_p50']}, "
+                f"p99 x{row['vs_same_machine_p99']}"
+            )
     print(f"plot: {png}")
 
 

@@ -15,6 +15,7 @@ a speed-adaptive filter smooths most.
 Run: bench/run filter_bench
 Writes bench/results/filter_bench.json and bench/results/filter_tradeoff.png.
 """
+
 import functools
 import json
 import os
@@ -26,8 +27,8 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_sensor"))
 
 from bench_common import RESULTS, write_results  # noqa: E402
-from motion_sensor.sequencing.filters import make_filter  # noqa: E402
 from motion_sensor.devices.leap_v6 import read_recording, select_primary  # noqa: E402
+from motion_sensor.sequencing.filters import make_filter  # noqa: E402
 
 STILL = ["Waiting-110fps", "waiting-short"]
 MOVING = ["wave", "flapping", "test-paddle-rightwards", "rollAndPitchCropped"]
@@ -38,21 +39,46 @@ SLOW_SPEEDS = (0.02, 0.05, 0.1, 0.2, 0.5)  # m/s, ramps added to a still-hand re
 # filters; "one_euro_classic" and "kalman_cv" are the textbook versions they extend.
 SWEEPS = {
     "mean": ("mean", [{"queue_size": n} for n in (2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 30)]),
-    "one_euro_classic": ("one_euro", [
-        {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": 0.0}
-        for m in (0.3, 1.0, 3.0) for b in (10.0, 20.0, 40.0, 80.0, 160.0, 320.0) for d in (0.3, 1.0, 3.0)]),
-    "one_euro": ("one_euro", [
-        {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": v}
-        for m in (0.3, 0.5, 1.0, 2.0, 3.0, 5.0) for b in (320.0, 640.0, 1280.0) for d in (1.0, 2.0, 4.0)
-        for v in (0.05, 0.08, 0.1, 0.15, 0.2)]),
-    "one_euro+deadband": ("one_euro", [
-        {"mincutoff": m, "deadband": db} for m in (1.0, 3.0) for db in (0.0002, 0.0005, 0.001, 0.002)]),
-    "kalman_cv": ("kalman", [
-        {"process_noise": q, "measurement_noise": r, "maneuver_process_noise": 0.0} for r in (0.0003, 0.001)
-        for q in (1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 0.01, 0.03, 0.1, 0.3, 1.0)]),
-    "kalman": ("kalman", [
-        {"process_noise": 1e-5, "measurement_noise": r, "maneuver_process_noise": qm, "switch_probability": p}
-        for r in (0.003, 0.005, 0.01) for qm in (3.0, 10.0, 30.0, 100.0) for p in (0.005, 0.05)]),
+    "one_euro_classic": (
+        "one_euro",
+        [
+            {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": 0.0}
+            for m in (0.3, 1.0, 3.0)
+            for b in (10.0, 20.0, 40.0, 80.0, 160.0, 320.0)
+            for d in (0.3, 1.0, 3.0)
+        ],
+    ),
+    "one_euro": (
+        "one_euro",
+        [
+            {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": v}
+            for m in (0.3, 0.5, 1.0, 2.0, 3.0, 5.0)
+            for b in (320.0, 640.0, 1280.0)
+            for d in (1.0, 2.0, 4.0)
+            for v in (0.05, 0.08, 0.1, 0.15, 0.2)
+        ],
+    ),
+    "one_euro+deadband": (
+        "one_euro",
+        [{"mincutoff": m, "deadband": db} for m in (1.0, 3.0) for db in (0.0002, 0.0005, 0.001, 0.002)],
+    ),
+    "kalman_cv": (
+        "kalman",
+        [
+            {"process_noise": q, "measurement_noise": r, "maneuver_process_noise": 0.0}
+            for r in (0.0003, 0.001)
+            for q in (1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 0.01, 0.03, 0.1, 0.3, 1.0)
+        ],
+    ),
+    "kalman": (
+        "kalman",
+        [
+            {"process_noise": 1e-5, "measurement_noise": r, "maneuver_process_noise": qm, "switch_probability": p}
+            for r in (0.003, 0.005, 0.01)
+            for qm in (3.0, 10.0, 30.0, 100.0)
+            for p in (0.005, 0.05)
+        ],
+    ),
 }
 
 
@@ -84,8 +110,8 @@ def jitter_mm(stamps, positions, skip=10):
     half = max(1, int(round(0.05 * rate)))
     kernel = np.ones(2 * half + 1) / (2 * half + 1)
     trend = np.column_stack([np.convolve(positions[:, i], kernel, mode="same") for i in range(3)])
-    residual = (positions - trend)[max(skip, half):-half]
-    return float(np.sqrt(np.mean(np.sum(residual ** 2, axis=1)))) * 1000
+    residual = (positions - trend)[max(skip, half) : -half]
+    return float(np.sqrt(np.mean(np.sum(residual**2, axis=1)))) * 1000
 
 
 def lag_mm(raw, filtered, skip=10):
@@ -145,8 +171,10 @@ def lag_at_jitter(curve, jitter):
 
 def main():
     data = {n: load(n) for n in STILL + MOVING + HELD_OUT_STILL + HELD_OUT_MOVING}
-    results = {"raw": dict(zip(("jitter_mm", "lag_mm"), evaluate(data, lambda n: data[n][1]))),
-               "leap_stabilized": dict(zip(("jitter_mm", "lag_mm"), evaluate(data, lambda n: data[n][2])))}
+    results = {
+        "raw": dict(zip(("jitter_mm", "lag_mm"), evaluate(data, lambda n: data[n][1]))),
+        "leap_stabilized": dict(zip(("jitter_mm", "lag_mm"), evaluate(data, lambda n: data[n][2]))),
+    }
     curves = {}
     total = sum(len(sweep) for _, sweep in SWEEPS.values())
     done = 0
@@ -177,9 +205,18 @@ def main():
     write_results("filter_bench", results, show=False)
     plot(results, os.path.join(RESULTS, "filter_tradeoff.png"))
     summary = {name: {k: v for k, v in verdict.items() if k != "pareto"} for name, verdict in verdict.items()}
-    print(json.dumps({"raw": results["raw"], "leap_stabilized": results["leap_stabilized"],
-                      "mean10": results["mean10"], "verdict": summary,
-                      "shipped_defaults": results["shipped_defaults"]}, indent=2))
+    print(
+        json.dumps(
+            {
+                "raw": results["raw"],
+                "leap_stabilized": results["leap_stabilized"],
+                "mean10": results["mean10"],
+                "verdict": summary,
+                "shipped_defaults": results["shipped_defaults"],
+            },
+            indent=2,
+        )
+    )
     print(f"plot: {os.path.join(RESULTS, 'filter_tradeoff.png')}")
 
 
@@ -194,38 +231,69 @@ def check_defaults(data):
     for label, produce in rows.items():
         tuned = evaluate(data, produce)
         held = evaluate(data, produce, HELD_OUT_STILL, HELD_OUT_MOVING)
-        out[label] = {"tuning_jitter_mm": round(tuned[0], 4), "tuning_lag_mm": round(tuned[1], 3),
-                      "held_out_jitter_mm": round(held[0], 4), "held_out_lag_mm": round(held[1], 3)}
+        out[label] = {
+            "tuning_jitter_mm": round(tuned[0], 4),
+            "tuning_lag_mm": round(tuned[1], 3),
+            "held_out_jitter_mm": round(held[0], 4),
+            "held_out_lag_mm": round(held[1], 3),
+        }
         if label in ("mean", "one_euro", "kalman"):
             out[label]["slow_move_time_lag_ms"] = slow_time_lag_ms(data, label)
     for label in ("one_euro", "kalman"):
         for split in ("tuning", "held_out"):
             out[label][f"{split}_lag_ratio_to_mean10"] = round(
-                out[label][f"{split}_lag_mm"] / out["mean"][f"{split}_lag_mm"], 3)
+                out[label][f"{split}_lag_mm"] / out["mean"][f"{split}_lag_mm"], 3
+            )
             out[label][f"{split}_steadier_than_mean10"] = (
-                out[label][f"{split}_jitter_mm"] <= out["mean"][f"{split}_jitter_mm"])
+                out[label][f"{split}_jitter_mm"] <= out["mean"][f"{split}_jitter_mm"]
+            )
     return out
 
 
 def plot(results, path):
     """Jitter-lag trade-off curves, and the shipped defaults' time lag on slow moves."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, (ax, ax_slow) = plt.subplots(1, 2, figsize=(13, 5.5), gridspec_kw={"width_ratios": [3, 2]})
     # One colour per family in both panels; dashed = the textbook version.
-    styles = {"mean": ("o-", "tab:blue"), "one_euro_classic": ("s--", "tab:orange"),
-              "one_euro": ("s-", "tab:orange"), "one_euro+deadband": ("D:", "tab:red"),
-              "kalman_cv": ("^--", "tab:green"), "kalman": ("^-", "tab:green")}
+    styles = {
+        "mean": ("o-", "tab:blue"),
+        "one_euro_classic": ("s--", "tab:orange"),
+        "one_euro": ("s-", "tab:orange"),
+        "one_euro+deadband": ("D:", "tab:red"),
+        "kalman_cv": ("^--", "tab:green"),
+        "kalman": ("^-", "tab:green"),
+    }
     for name, curve in results["curves"].items():
         front = pareto(curve)
-        ax.plot([c["jitter_mm"] for c in front], [c["lag_mm"] for c in front], styles[name][0],
-                color=styles[name][1], label=f"{name} (best settings of the sweep)", ms=4)
+        ax.plot(
+            [c["jitter_mm"] for c in front],
+            [c["lag_mm"] for c in front],
+            styles[name][0],
+            color=styles[name][1],
+            label=f"{name} (best settings of the sweep)",
+            ms=4,
+        )
     ax.plot(results["raw"]["jitter_mm"], 0.01, "kx", ms=9, label="raw palm (lag 0, drawn at 0.01)")
-    ax.plot(results["leap_stabilized"]["jitter_mm"], results["leap_stabilized"]["lag_mm"], "r*", ms=13,
-            label="Leap stabilizedPalmPosition")
-    ax.plot(results["mean10"]["jitter_mm"], results["mean10"]["lag_mm"], "o", mfc="none", mec="k", ms=12,
-            label="mean, queue 10 (paper)")
+    ax.plot(
+        results["leap_stabilized"]["jitter_mm"],
+        results["leap_stabilized"]["lag_mm"],
+        "r*",
+        ms=13,
+        label="Leap stabilizedPalmPosition",
+    )
+    ax.plot(
+        results["mean10"]["jitter_mm"],
+        results["mean10"]["lag_mm"],
+        "o",
+        mfc="none",
+        mec="k",
+        ms=12,
+        label="mean, queue 10 (paper)",
+    )
     goal = results["mean10"]["lag_mm"] / 3
     ax.plot([results["mean10"]["jitter_mm"]] * 2, [goal, results["mean10"]["lag_mm"]], "k:", lw=1)
     ax.plot(results["mean10"]["jitter_mm"], goal, "k_", ms=14, label="goal: 1/3 of mean-10's lag")
@@ -239,8 +307,13 @@ def plot(results, path):
     defaults = results["shipped_defaults"]
     for name in ("mean", "one_euro", "kalman"):
         lags = defaults[name]["slow_move_time_lag_ms"]
-        ax_slow.plot([float(v) for v in lags], list(lags.values()), styles[name][0], color=styles[name][1],
-                     label=f"{name} (shipped defaults)")
+        ax_slow.plot(
+            [float(v) for v in lags],
+            list(lags.values()),
+            styles[name][0],
+            color=styles[name][1],
+            label=f"{name} (shipped defaults)",
+        )
     ax_slow.set_xscale("log")
     ax_slow.set_xticks(SLOW_SPEEDS)
     ax_slow.set_xticklabels([f"{v:g}" for v in SLOW_SPEEDS])

@@ -20,6 +20,7 @@ Run: bench/run gesture_bench [--stride 3]   (every STRIDE-th test sequence for (
 stay short on 2 shared cores). Writes bench/results/gesture_bench.json. Skips (a)-(c) with
 a message when ../shared is absent.
 """
+
 import argparse
 import json
 import os
@@ -33,12 +34,15 @@ from dtaidistance import dtw_ndim
 
 from bench_common import ROOT, write_results
 
-sys.path[:0] = [os.path.join(ROOT, "src", "motion_sensor"), os.path.join(ROOT, "src", "motion_common"),
-                os.path.join(ROOT, "tests", "tools")]
+sys.path[:0] = [
+    os.path.join(ROOT, "src", "motion_sensor"),
+    os.path.join(ROOT, "src", "motion_common"),
+    os.path.join(ROOT, "tests", "tools"),
+]
+import air_letters  # noqa: E402
 from motion_sensor.gestures.dtw_classifier import DTWClassifier  # noqa: E402
 from motion_sensor.gestures.gesture_frame import GestureFrame  # noqa: E402
 from motion_sensor.gestures.static_poses import StaticPoseDetector  # noqa: E402
-import air_letters  # noqa: E402
 
 SHREC = os.path.join(ROOT, "..", "shared", "data", "shrec17_train", "shrec17_train.npz")
 CAMERA_TO_LEAPLIKE = np.array([1.0, -1.0, -1.0])  # y down -> up (a proper rotation about x)
@@ -51,7 +55,8 @@ def stats(ms):
 def baseline(train, test):
     def prep(p):
         p = p - p.mean(axis=0)
-        return np.ascontiguousarray(p / np.sqrt((p ** 2).sum(axis=1).mean()))
+        return np.ascontiguousarray(p / np.sqrt((p**2).sum(axis=1).mean()))
+
     templates = [(label, prep(p)) for label, p, _ in train]
     correct, times = 0, []
     for label, p, _ in test:
@@ -76,13 +81,22 @@ def ours(train, test, **kw):
 
 def compare(train, test, stride, baseline_stride=None):
     acc, ms = ours(train, test[::stride])
-    base_acc, base_ms = baseline(train, test[::baseline_stride or stride])
+    base_acc, base_ms = baseline(train, test[:: baseline_stride or stride])
     p50, p99 = stats(ms)
     b50, b99 = stats(base_ms)
-    return {"n_train": len(train), "n_test": len(test[::stride]), "accuracy": round(acc, 4), "ms_p50": p50,
-            "ms_p99": p99, "baseline_accuracy": round(base_acc, 4), "baseline_ms_p50": b50, "baseline_ms_p99": b99,
-            "speedup_p50": round(b50 / p50, 1), "speedup_p99": round(b99 / p99, 1),
-            "accuracy_gain": round(acc - base_acc, 4)}
+    return {
+        "n_train": len(train),
+        "n_test": len(test[::stride]),
+        "accuracy": round(acc, 4),
+        "ms_p50": p50,
+        "ms_p99": p99,
+        "baseline_accuracy": round(base_acc, 4),
+        "baseline_ms_p50": b50,
+        "baseline_ms_p99": b99,
+        "speedup_p50": round(b50 / p50, 1),
+        "speedup_p99": round(b99 / p99, 1),
+        "accuracy_gain": round(acc - base_acc, 4),
+    }
 
 
 def export_letters(data, folder):
@@ -91,8 +105,12 @@ def export_letters(data, folder):
         sub = os.path.join(folder, f"s{subject}")
         os.makedirs(sub, exist_ok=True)
         for label, points, times in items:
-            np.savetxt(os.path.join(sub, f"{label}.csv"), np.column_stack([points, times]), fmt="%.2f",
-                       header="x y z t  (mm, ms; Leap axes: x right, y up, z toward the user)")
+            np.savetxt(
+                os.path.join(sub, f"{label}.csv"),
+                np.column_stack([points, times]),
+                fmt="%.2f",
+                header="x y z t  (mm, ms; Leap axes: x right, y up, z toward the user)",
+            )
 
 
 def shrec_sequences(data, joint, coarse):
@@ -101,14 +119,14 @@ def shrec_sequences(data, joint, coarse):
     for i, gesture in enumerate(data["gesture"]):
         if coarse and gesture < 7:
             continue
-        points = joints[offsets[i]:offsets[i + 1], joint].astype(float) * CAMERA_TO_LEAPLIKE * 1000.0
+        points = joints[offsets[i] : offsets[i + 1], joint].astype(float) * CAMERA_TO_LEAPLIKE * 1000.0
         out.append((str(int(gesture)), points, np.arange(len(points)) * 1000.0 / 30.0, int(data["subject"][i])))
     return out
 
 
 def split(seqs):
     subjects = sorted({s for *_, s in seqs})
-    first = set(subjects[:len(subjects) // 2])
+    first = set(subjects[: len(subjects) // 2])
     a = [(l, p, t) for l, p, t, s in seqs if s in first]
     b = [(l, p, t) for l, p, t, s in seqs if s not in first]
     return a, b
@@ -133,9 +151,11 @@ def static_bench(data):
             continue
         det = StaticPoseDetector({"fist_dwell_s": 0.1})
         names = []
-        for k, frame in enumerate(joints[offsets[i]:offsets[i + 1]]):
-            names += [e.name for e in det.update(GestureFrame(k / 30.0, frame[1].astype(float),
-                                                              grab=grab_proxy(frame), pinch=0.0))]
+        for k, frame in enumerate(joints[offsets[i] : offsets[i + 1]]):
+            names += [
+                e.name
+                for e in det.update(GestureFrame(k / 30.0, frame[1].astype(float), grab=grab_proxy(frame), pinch=0.0))
+            ]
         fired.setdefault(kind, []).append("fist" in names)
     return {kind: {"sequences": len(v), "fist_rate": round(float(np.mean(v)), 3)} for kind, v in fired.items()}
 
@@ -144,12 +164,25 @@ def run_cli(folders):
     out = {}
     for train, test in (("A", "B"), ("B", "A")):
         start = time.perf_counter()
-        proc = subprocess.run([sys.executable, os.path.join(ROOT, "src", "motion_sensor", "nodes", "gesture_eval"),
-                               "--train", folders[train], "--test", folders[test], "--json"],
-                              capture_output=True, text=True, timeout=600)
+        proc = subprocess.run(
+            [
+                sys.executable,
+                os.path.join(ROOT, "src", "motion_sensor", "nodes", "gesture_eval"),
+                "--train",
+                folders[train],
+                "--test",
+                folders[test],
+                "--json",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
         result = json.loads(proc.stdout.strip().splitlines()[-1])
-        out[f"{train}->{test}"] = {k: result[k] for k in ("accuracy", "ms_per_classification_p50",
-                                                          "ms_per_classification_p99", "n_train", "n_test")}
+        out[f"{train}->{test}"] = {
+            k: result[k]
+            for k in ("accuracy", "ms_per_classification_p50", "ms_per_classification_p99", "n_train", "n_test")
+        }
         out[f"{train}->{test}"]["wall_s"] = round(time.perf_counter() - start, 1)
         print(f"  CLI {train}->{test}: {out[f'{train}->{test}']}", flush=True)
     return out
@@ -158,7 +191,7 @@ def run_cli(folders):
 def cli_bench(seqs, tmp):
     folders = {}
     subjects = sorted({s for *_, s in seqs})
-    for half, group in (("A", subjects[:len(subjects) // 2]), ("B", subjects[len(subjects) // 2:])):
+    for half, group in (("A", subjects[: len(subjects) // 2]), ("B", subjects[len(subjects) // 2 :])):
         folders[half] = os.path.join(tmp, half)
         counts = {}
         for label, points, times, subject in seqs:
@@ -175,25 +208,39 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--stride", type=int, default=3, help="use every STRIDE-th test sequence in (a)")
     args = parser.parse_args()
-    results = {"goals": {"ms_per_classification": 5.0, "letters_accuracy": 0.97},
-               "classifier": {"features": vars(DTWClassifier().config), "window": DTWClassifier().window_fraction,
-                              "k": DTWClassifier().k},
-               "baseline": "centred, RMS-scaled raw 3-D path, unconstrained DTW 1-NN (dtaidistance dtw_ndim)"}
+    results = {
+        "goals": {"ms_per_classification": 5.0, "letters_accuracy": 0.97},
+        "classifier": {
+            "features": vars(DTWClassifier().config),
+            "window": DTWClassifier().window_fraction,
+            "k": DTWClassifier().k,
+        },
+        "baseline": "centred, RMS-scaled raw 3-D path, unconstrained DTW 1-NN (dtaidistance dtw_ndim)",
+    }
 
     letters = air_letters.dataset(range(1, 21), 1, seed=2026)
     a = [x for s in range(1, 11) for x in letters[s]]
     b = [x for s in range(11, 21) for x in letters[s]]
-    hard = {"set": "air_letters.dataset(range(1, 21), 1, seed=2026), difficulty 1.0; A = subjects 1-10, B = 11-20",
-            "A->B": compare(a, b, 1), "B->A": compare(b, a, 1)}
+    hard = {
+        "set": "air_letters.dataset(range(1, 21), 1, seed=2026), difficulty 1.0; A = subjects 1-10, B = 11-20",
+        "A->B": compare(a, b, 1),
+        "B->A": compare(b, a, 1),
+    }
     hard["mean_accuracy"] = round((hard["A->B"]["accuracy"] + hard["B->A"]["accuracy"]) / 2, 4)
-    hard["mean_baseline_accuracy"] = round((hard["A->B"]["baseline_accuracy"]
-                                            + hard["B->A"]["baseline_accuracy"]) / 2, 4)
+    hard["mean_baseline_accuracy"] = round(
+        (hard["A->B"]["baseline_accuracy"] + hard["B->A"]["baseline_accuracy"]) / 2, 4
+    )
     print("hard synthetic letters:", hard, flush=True)
     many = air_letters.dataset(range(21, 61), 1, seed=2026)
     big = [x for s in many for x in many[s]]
     acc, ms = ours(big, (a + b)[::4])
-    hard["templates_1040"] = {"n_train": len(big), "n_test": len((a + b)[::4]), "accuracy": round(acc, 4),
-                              "ms_p50": stats(ms)[0], "ms_p99": stats(ms)[1]}
+    hard["templates_1040"] = {
+        "n_train": len(big),
+        "n_test": len((a + b)[::4]),
+        "accuracy": round(acc, 4),
+        "ms_p50": stats(ms)[0],
+        "ms_p99": stats(ms)[1],
+    }
     print("  1,040 templates:", hard["templates_1040"], flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         folders = {"A": os.path.join(tmp, "A"), "B": os.path.join(tmp, "B")}

@@ -11,6 +11,7 @@ index tip and palm, coarse and all 14, subjects split in sorted halves):
 Selection score = mean(letters inner, mean of the SHREC inner figures).
 Run: .venv/bin/python bench/gesture_explore.py [--stride 2] [--out FILE]
 """
+
 import argparse
 import json
 import os
@@ -20,8 +21,12 @@ import time
 import numpy as np
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-sys.path[:0] = [os.path.join(ROOT, "src", "motion_sensor"), os.path.join(ROOT, "src", "motion_common"),
-                os.path.join(ROOT, "tests", "tools"), os.path.join(ROOT, "bench")]
+sys.path[:0] = [
+    os.path.join(ROOT, "src", "motion_sensor"),
+    os.path.join(ROOT, "src", "motion_common"),
+    os.path.join(ROOT, "tests", "tools"),
+    os.path.join(ROOT, "bench"),
+]
 import air_letters  # noqa: E402
 from motion_sensor.gestures.dtw_classifier import DTWClassifier  # noqa: E402
 from motion_sensor.gestures.gesture_features import FeatureConfig  # noqa: E402
@@ -47,7 +52,7 @@ def accuracy(spec, train, test, stride):
 
 def halves(seqs):
     subjects = sorted({s for *_, s in seqs})
-    first = set(subjects[:len(subjects) // 2])
+    first = set(subjects[: len(subjects) // 2])
     return [x for x in seqs if x[3] in first], [x for x in seqs if x[3] not in first]
 
 
@@ -73,7 +78,7 @@ def datasets():
                 for i, g in enumerate(data["gesture"]):
                     if coarse and g < 7:
                         continue
-                    p = joints[offsets[i]:offsets[i + 1], joint].astype(float) * CAMERA_TO_LEAPLIKE * 1000.0
+                    p = joints[offsets[i] : offsets[i + 1], joint].astype(float) * CAMERA_TO_LEAPLIKE * 1000.0
                     seqs.append((str(int(g)), p, np.arange(len(p)) * 1000.0 / 30.0, int(data["subject"][i])))
                 out[f"shrec_{name}_{subset}"] = seqs
     return out
@@ -117,9 +122,16 @@ def main():
         row["score_inner"] = round(float(np.mean([row["letters"]["inner"], np.mean(shrec) if shrec else 0])), 4)
         row["spec"] = spec
         results[name] = row
-        print(f"{name:18s} score {row['score_inner']:.4f} " + " ".join(
-            f"{k}:{v['inner']:.3f}/{v['outer'][0]:.3f}/{v['outer'][1]:.3f}" for k, v in row.items()
-            if isinstance(v, dict) and "inner" in v) + f" ({time.perf_counter() - start:.0f} s)", flush=True)
+        print(
+            f"{name:18s} score {row['score_inner']:.4f} "
+            + " ".join(
+                f"{k}:{v['inner']:.3f}/{v['outer'][0]:.3f}/{v['outer'][1]:.3f}"
+                for k, v in row.items()
+                if isinstance(v, dict) and "inner" in v
+            )
+            + f" ({time.perf_counter() - start:.0f} s)",
+            flush=True,
+        )
     with open(args.out, "w") as fh:
         json.dump(results, fh, indent=1)
 

@@ -5,6 +5,7 @@ persistent client (baseline: a fresh connection per call), and streaming SetJoin
 Run: bench/run hw_bench [--stream-seconds 10] [--calls 2000]
 Writes bench/results/hw_bench.json.
 """
+
 import argparse
 import os
 import subprocess
@@ -23,14 +24,19 @@ PORT = 11477  # a master of its own, so a running session is never disturbed
 def percentiles(samples_s):
     """p50/p99/max in microseconds."""
     us = np.asarray(samples_s) * 1e6
-    return {"p50_us": round(float(np.percentile(us, 50)), 1), "p99_us": round(float(np.percentile(us, 99)), 1),
-            "max_us": round(float(us.max()), 1), "n": int(len(us))}
+    return {
+        "p50_us": round(float(np.percentile(us, 50)), 1),
+        "p99_us": round(float(np.percentile(us, 99)), 1),
+        "max_us": round(float(us.max()), 1),
+        "n": int(len(us)),
+    }
 
 
 def sim_real_time_factor(seconds):
     """Real-time factor of the pybullet driver in its real-time and free-running modes."""
     sys.path.insert(0, os.path.join(ROOT, "src", "hw_interface"))
     from hw_interface.sim_driver import PybulletSimDriver
+
     urdf = os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf")
     figures = {}
     for real_time in (True, False):
@@ -42,7 +48,10 @@ def sim_real_time_factor(seconds):
             time.sleep(0.002)
         factor = (sim.sim_time - start_sim) / (time.perf_counter() - start_wall)
         figures["real_time" if real_time else "free_running"] = {
-            "factor": round(factor, 3), "overruns": sim.overruns, "steps": sim.steps}
+            "factor": round(factor, 3),
+            "overruns": sim.overruns,
+            "steps": sim.steps,
+        }
         sim.disconnect()
     return figures
 
@@ -51,12 +60,18 @@ def service_benchmarks(calls, stream_seconds):
     """Round trip and 500 Hz streaming through a hw_sim.launch started here."""
     env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}")
     os.environ["ROS_MASTER_URI"] = env["ROS_MASTER_URI"]
-    launch = subprocess.Popen(["roslaunch", "-p", str(PORT), os.path.join(ROOT, "src", "motion_bringup", "launch", "hw_sim.launch")],
-                              env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    launch = subprocess.Popen(
+        ["roslaunch", "-p", str(PORT), os.path.join(ROOT, "src", "motion_bringup", "launch", "hw_sim.launch")],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         import rospy
-        from motion_commander.srv import commander, commanderRequest
+
         from hw_interface.controller_client import MotionControllerClient
+        from motion_commander.srv import commander, commanderRequest
+
         rospy.init_node("hw_bench", disable_signals=True)
         client = MotionControllerClient(timeout=60.0)
         client.move_j(HOME)
@@ -96,8 +111,13 @@ def service_benchmarks(calls, stream_seconds):
             "round_trip_persistent": percentiles(persistent),
             "round_trip_fresh_connection_baseline": percentiles(fresh),
             "persistent_speedup_p50": round(float(np.median(fresh) / np.median(persistent)), 2),
-            "stream_500hz": {"periods": total, "missed": missed, "missed_pct": round(100.0 * missed / total, 3),
-                             "achieved_rate_hz": round(total / elapsed, 1), **percentiles(stream_rtt)},
+            "stream_500hz": {
+                "periods": total,
+                "missed": missed,
+                "missed_pct": round(100.0 * missed / total, 3),
+                "achieved_rate_hz": round(total / elapsed, 1),
+                **percentiles(stream_rtt),
+            },
         }
     finally:
         launch.terminate()

@@ -15,6 +15,7 @@ Prints p50/p99 timings, accuracy, pose-error percentiles, rejections and every p
 was missed or confused (with the detector's reason). Writes
 bench/results/kitting_vision_bench.json (seed 1) or kitting_vision_bench_seed<S>.json.
 """
+
 import argparse
 import math
 import os
@@ -61,19 +62,29 @@ def charuco(client):
     camera = PinholeCamera(640, 480, np.array([[600.0, 0, 319.5], [0, 600.0, 239.5], [0, 0, 1]]))
     images = render_board_views(client, spec, camera, 15)
     result = calibrate_intrinsics(images, spec)
-    return {"views": result.views_used, "fx": round(result.fx, 3), "fy": round(result.fy, 3), "true_f": 600.0,
-            "focal_error_pct": round(100 * max(abs(result.fx / 600 - 1), abs(result.fy / 600 - 1)), 3),
-            "cx": round(float(result.K[0, 2]), 3), "cy": round(float(result.K[1, 2]), 3),
-            "reprojection_rms_px": round(result.rms, 4)}
+    return {
+        "views": result.views_used,
+        "fx": round(result.fx, 3),
+        "fy": round(result.fy, 3),
+        "true_f": 600.0,
+        "focal_error_pct": round(100 * max(abs(result.fx / 600 - 1), abs(result.fy / 600 - 1)), 3),
+        "cx": round(float(result.K[0, 2]), 3),
+        "cy": round(float(result.K[1, 2]), 3),
+        "reprojection_rms_px": round(result.rms, 4),
+    }
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--images", type=int, default=120, help="rendered images (default 120)")
     parser.add_argument("--parts-per-image", type=int, default=3, help="random parts per image (default 3)")
-    parser.add_argument("--seed", type=int, default=1,
-                        help="seed of the placements, classes and yaws (default 1; another seed also "
-                             "names the result file kitting_vision_bench_seed<S>.json)")
+    parser.add_argument(
+        "--seed",
+        type=int,
+        default=1,
+        help="seed of the placements, classes and yaws (default 1; another seed also "
+        "names the result file kitting_vision_bench_seed<S>.json)",
+    )
     parser.add_argument("--worker-frames", type=int, default=20, help="frames through the render process (default 20)")
     args = parser.parse_args()
 
@@ -83,8 +94,9 @@ def main():
     p.resetSimulation(physicsClientId=client)
     scene = SimScene(client, cell)
     true_camera = PinholeCamera.from_spec(cell.camera)
-    calibration = extrinsics_from_marker(render(client, true_camera, supersample=2), cell.markers,
-                                         true_camera.K, true_camera.distortion)
+    calibration = extrinsics_from_marker(
+        render(client, true_camera, supersample=2), cell.markers, true_camera.K, true_camera.distortion
+    )
     if not calibration.ok:
         sys.exit(f"marker calibration failed: {calibration.reason}")
     position_error, angle_error = pose_error(calibration.T_base_cam, true_camera.pose)
@@ -140,14 +152,27 @@ def main():
             if found.get((x, y)) == name:
                 continue
             pixel = camera.project([[x, y, cell.belt.height]])[0]
-            near = [r for r in result.rejections
-                    if r.pixel is not None and math.hypot(r.pixel[0] - pixel[0], r.pixel[1] - pixel[1]) < 25]
+            near = [
+                r
+                for r in result.rejections
+                if r.pixel is not None and math.hypot(r.pixel[0] - pixel[0], r.pixel[1] - pixel[1]) < 25
+            ]
             nearest = min(observations, key=lambda o: math.hypot(x - o.x, y - o.y), default=None)
-            misses.append({"image": image_index, "class": name, "x": round(x, 4), "y": round(y, 4),
-                           "yaw_deg": round(math.degrees(yaw), 1), "seen_as": found.get((x, y)),
-                           "reason": near[0].reason if near else None, "detail": near[0].detail if near else "",
-                           "nearest_detection": None if nearest is None else
-                           [nearest.class_name, round(1000 * math.hypot(x - nearest.x, y - nearest.y), 1)]})
+            misses.append(
+                {
+                    "image": image_index,
+                    "class": name,
+                    "x": round(x, 4),
+                    "y": round(y, 4),
+                    "yaw_deg": round(math.degrees(yaw), 1),
+                    "seen_as": found.get((x, y)),
+                    "reason": near[0].reason if near else None,
+                    "detail": near[0].detail if near else "",
+                    "nearest_detection": None
+                    if nearest is None
+                    else [nearest.class_name, round(1000 * math.hypot(x - nearest.x, y - nearest.y), 1)],
+                }
+            )
 
     worker_ms = []
     with RenderWorker() as worker:
@@ -159,52 +184,81 @@ def main():
 
     classes = {}
     for name, stats in per_class.items():
-        classes[name] = {"placed": stats["placed"], "detected": stats["detected"],
-                         "accuracy": round(stats["correct"] / stats["placed"], 4) if stats["placed"] else None,
-                         "pose_error_mm_p50": pct(stats["errors_mm"], 50),
-                         "pose_error_mm_p95": pct(stats["errors_mm"], 95)}
+        classes[name] = {
+            "placed": stats["placed"],
+            "detected": stats["detected"],
+            "accuracy": round(stats["correct"] / stats["placed"], 4) if stats["placed"] else None,
+            "pose_error_mm_p50": pct(stats["errors_mm"], 50),
+            "pose_error_mm_p95": pct(stats["errors_mm"], 95),
+        }
     placed = sum(s["placed"] for s in per_class.values())
     results = {
-        "images": args.images, "parts_per_image": args.parts_per_image, "seed": args.seed,
+        "images": args.images,
+        "parts_per_image": args.parts_per_image,
+        "seed": args.seed,
         "image_size": [true_camera.width, true_camera.height],
-        "render_ms_p50": pct(render_ms, 50), "render_ms_p99": pct(render_ms, 99),
-        "render_worker_roundtrip_ms_p50": pct(worker_ms, 50), "render_worker_roundtrip_ms_p99": pct(worker_ms, 99),
-        "detector_ms_p50": pct(detect_ms, 50), "detector_ms_p99": pct(detect_ms, 99),
+        "render_ms_p50": pct(render_ms, 50),
+        "render_ms_p99": pct(render_ms, 99),
+        "render_worker_roundtrip_ms_p50": pct(worker_ms, 50),
+        "render_worker_roundtrip_ms_p99": pct(worker_ms, 99),
+        "detector_ms_p50": pct(detect_ms, 50),
+        "detector_ms_p99": pct(detect_ms, 99),
         "classification_accuracy": round(sum(s["correct"] for s in per_class.values()) / placed, 4),
         "detection_rate": round(sum(s["detected"] for s in per_class.values()) / placed, 4),
-        "pose_error_mm_p50": pct(errors, 50), "pose_error_mm_p95": pct(errors, 95),
-        "pose_error_mm_p99": pct(errors, 99), "pose_error_mm_max": pct(errors, 100),
-        "pose_error_true_camera_mm_p50": pct(errors_true, 50), "pose_error_true_camera_mm_p95": pct(errors_true, 95),
-        "marker_extrinsics": {"markers": calibration.used, "position_error_mm": round(1000 * position_error, 3),
-                              "rotation_error_deg": round(angle_error, 4),
-                              "reprojection_px": round(calibration.reprojection_px, 4)},
+        "pose_error_mm_p50": pct(errors, 50),
+        "pose_error_mm_p95": pct(errors, 95),
+        "pose_error_mm_p99": pct(errors, 99),
+        "pose_error_mm_max": pct(errors, 100),
+        "pose_error_true_camera_mm_p50": pct(errors_true, 50),
+        "pose_error_true_camera_mm_p95": pct(errors_true, 95),
+        "marker_extrinsics": {
+            "markers": calibration.used,
+            "position_error_mm": round(1000 * position_error, 3),
+            "rotation_error_deg": round(angle_error, 4),
+            "reprojection_px": round(calibration.reprojection_px, 4),
+        },
         "charuco_intrinsics": intrinsics,
-        "rejections": rejections, "per_class": classes, "confusion": confusion,
+        "rejections": rejections,
+        "per_class": classes,
+        "confusion": confusion,
         "confusions": sum(n for name, row in confusion.items() for other, n in row.items() if other != name),
         "misses": misses,
     }
-    write_results("kitting_vision_bench" if args.seed == 1 else f"kitting_vision_bench_seed{args.seed}", results,
-                  show=False)
+    write_results(
+        "kitting_vision_bench" if args.seed == 1 else f"kitting_vision_bench_seed{args.seed}", results, show=False
+    )
     print(f"\nseed {args.seed}: {args.images} images x {args.parts_per_image} parts, {placed} placed")
-    print(f"render 640x480 p50/p99 {results['render_ms_p50']}/{results['render_ms_p99']} ms, through the render "
-          f"process {results['render_worker_roundtrip_ms_p50']}/{results['render_worker_roundtrip_ms_p99']} ms; "
-          f"detector p50/p99 {results['detector_ms_p50']}/{results['detector_ms_p99']} ms")
-    print(f"classification accuracy {100 * results['classification_accuracy']:.2f} % "
-          f"(detected {100 * results['detection_rate']:.2f} %, confusions {results['confusions']}); "
-          f"rejections {rejections}")
-    print(f"pose error p50/p95/p99/max {results['pose_error_mm_p50']}/{results['pose_error_mm_p95']}/"
-          f"{results['pose_error_mm_p99']}/{results['pose_error_mm_max']} mm (true camera p50/p95 "
-          f"{results['pose_error_true_camera_mm_p50']}/{results['pose_error_true_camera_mm_p95']} mm)")
-    print(f"ChArUco focal error {intrinsics['focal_error_pct']} %, reprojection {intrinsics['reprojection_rms_px']} px; "
-          f"marker extrinsics {results['marker_extrinsics']['position_error_mm']} mm / "
-          f"{results['marker_extrinsics']['rotation_error_deg']} deg")
+    print(
+        f"render 640x480 p50/p99 {results['render_ms_p50']}/{results['render_ms_p99']} ms, through the render "
+        f"process {results['render_worker_roundtrip_ms_p50']}/{results['render_worker_roundtrip_ms_p99']} ms; "
+        f"detector p50/p99 {results['detector_ms_p50']}/{results['detector_ms_p99']} ms"
+    )
+    print(
+        f"classification accuracy {100 * results['classification_accuracy']:.2f} % "
+        f"(detected {100 * results['detection_rate']:.2f} %, confusions {results['confusions']}); "
+        f"rejections {rejections}"
+    )
+    print(
+        f"pose error p50/p95/p99/max {results['pose_error_mm_p50']}/{results['pose_error_mm_p95']}/"
+        f"{results['pose_error_mm_p99']}/{results['pose_error_mm_max']} mm (true camera p50/p95 "
+        f"{results['pose_error_true_camera_mm_p50']}/{results['pose_error_true_camera_mm_p95']} mm)"
+    )
+    print(
+        f"ChArUco focal error {intrinsics['focal_error_pct']} %, reprojection {intrinsics['reprojection_rms_px']} px; "
+        f"marker extrinsics {results['marker_extrinsics']['position_error_mm']} mm / "
+        f"{results['marker_extrinsics']['rotation_error_deg']} deg"
+    )
     for miss in misses:
-        print(f"  missed: image {miss['image']} {miss['class']} at ({miss['x']}, {miss['y']}) yaw {miss['yaw_deg']}°: "
-              f"{miss['seen_as'] or miss['reason']} {miss['detail']} (nearest detection: {miss['nearest_detection']})")
+        print(
+            f"  missed: image {miss['image']} {miss['class']} at ({miss['x']}, {miss['y']}) yaw {miss['yaw_deg']}°: "
+            f"{miss['seen_as'] or miss['reason']} {miss['detail']} (nearest detection: {miss['nearest_detection']})"
+        )
     print(f"\n{'class':15s} {'placed':>6s} {'det':>5s} {'acc':>6s} {'p50 mm':>7s} {'p95 mm':>7s}")
     for name, row in classes.items():
-        print(f"{name:15s} {row['placed']:6d} {row['detected']:5d} {row['accuracy']!s:>6s} "
-              f"{row['pose_error_mm_p50']!s:>7s} {row['pose_error_mm_p95']!s:>7s}")
+        print(
+            f"{name:15s} {row['placed']:6d} {row['detected']:5d} {row['accuracy']!s:>6s} "
+            f"{row['pose_error_mm_p50']!s:>7s} {row['pose_error_mm_p95']!s:>7s}"
+        )
 
 
 if __name__ == "__main__":

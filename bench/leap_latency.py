@@ -6,6 +6,7 @@ Also reported: to /motion_sensor/raw_hand (driver only).
 Run: bench/run leap_latency
 Writes bench/results/leap_latency.json.
 """
+
 import os
 import subprocess
 import sys
@@ -24,6 +25,7 @@ RECORDINGS = ["Waiting-110fps", "rollAndPitchCropped"]
 def main():
     os.environ["ROS_MASTER_URI"] = f"http://localhost:{MASTER}"
     import rospy
+
     from motion_sensor.devices.leap_server import LeapReplayServer
     from motion_sensor.devices.leap_v6 import parse_message, select_primary
     from motion_sensor.msg import hand
@@ -34,8 +36,9 @@ def main():
     results = {}
     try:
         for name in RECORDINGS:
-            server = LeapReplayServer(os.path.join(ROOT, "tests", "data", f"{name}.jsonl.gz"), port=PORT,
-                                      start_delay=2.0)
+            server = LeapReplayServer(
+                os.path.join(ROOT, "tests", "data", f"{name}.jsonl.gz"), port=PORT, start_delay=2.0
+            )
             # Positions identify frames exactly: the driver converts them deterministically.
             keys = {}
             for index, text in enumerate(server.frames):
@@ -59,11 +62,20 @@ def main():
                     if index is not None:
                         out_times.setdefault(index, now)
 
-            subs = [rospy.Subscriber("/motion_sensor/raw_hand", hand, on_raw, queue_size=1000, tcp_nodelay=True),
-                    rospy.Subscriber("/motion_sensor/hand", hand, on_filtered, queue_size=1000, tcp_nodelay=True)]
+            subs = [
+                rospy.Subscriber("/motion_sensor/raw_hand", hand, on_raw, queue_size=1000, tcp_nodelay=True),
+                rospy.Subscriber("/motion_sensor/hand", hand, on_filtered, queue_size=1000, tcp_nodelay=True),
+            ]
             server.start()
-            launch = subprocess.Popen(["roslaunch", os.path.join(ROOT, "src", "motion_bringup", "launch", "sensing.launch"),
-                                       f"leap_port:={PORT}"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            launch = subprocess.Popen(
+                [
+                    "roslaunch",
+                    os.path.join(ROOT, "src", "motion_bringup", "launch", "sensing.launch"),
+                    f"leap_port:={PORT}",
+                ],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
             print(f"replaying {name} ({len(server.frames)} frames)...", flush=True)
             server.done.wait(60)
             time.sleep(0.5)
@@ -76,10 +88,16 @@ def main():
             out = [out_times[i] - server.send_times[i] for i in out_times if i in server.send_times]
             results[name] = {
                 "frames_sent": len(server.send_times),
-                "to_raw_hand_ms": {"p50": round(float(np.percentile(raw, 50)) * 1000, 3),
-                                   "p99": round(float(np.percentile(raw, 99)) * 1000, 3), "n": len(raw)},
-                "to_filtered_hand_ms": {"p50": round(float(np.percentile(out, 50)) * 1000, 3),
-                                        "p99": round(float(np.percentile(out, 99)) * 1000, 3), "n": len(out)},
+                "to_raw_hand_ms": {
+                    "p50": round(float(np.percentile(raw, 50)) * 1000, 3),
+                    "p99": round(float(np.percentile(raw, 99)) * 1000, 3),
+                    "n": len(raw),
+                },
+                "to_filtered_hand_ms": {
+                    "p50": round(float(np.percentile(out, 50)) * 1000, 3),
+                    "p99": round(float(np.percentile(out, 99)) * 1000, 3),
+                    "n": len(out),
+                },
             }
             print(f"  {results[name]}", flush=True)
     finally:

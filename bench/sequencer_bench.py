@@ -5,6 +5,7 @@ timing, trims, jump gate, filter, continuity). Baseline: the filter's update alo
 Run: bench/run sequencer_bench
 Writes bench/results/sequencer_bench.json.
 """
+
 import os
 import sys
 import time
@@ -16,9 +17,9 @@ from bench_common import write_results
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(ROOT, "src", "motion_sensor"))
 
-from motion_sensor.sequencing.filters import make_filter  # noqa: E402
-from motion_sensor.hand_sample import HandSample  # noqa: E402
 from motion_sensor.devices.leap_v6 import read_recording, select_primary  # noqa: E402
+from motion_sensor.hand_sample import HandSample  # noqa: E402
+from motion_sensor.sequencing.filters import make_filter  # noqa: E402
 from motion_sensor.sequencing.sequencer import Sequencer, SequencerConfig  # noqa: E402
 
 
@@ -58,12 +59,19 @@ def main():
             start = time.perf_counter()
             bare.update(sample.stamp, sample.position, sample.orientation)
             filter_costs.append(time.perf_counter() - start)
-        results[name] = {"sequencer": percentiles(costs), "filter_only_baseline": percentiles(filter_costs),
-                         "frames_out": sequencer.counters["frames_out"], "dropped": sequencer.dropped,
-                         "budget_used_at_1khz_p99": round(float(np.percentile(costs, 99)) / 0.001, 3)}
-        print(f"{name:9s} sequencer p50 {results[name]['sequencer']['p50_us']} us, "
-              f"p99 {results[name]['sequencer']['p99_us']} us (filter alone p50 "
-              f"{results[name]['filter_only_baseline']['p50_us']} us)", flush=True)
+        results[name] = {
+            "sequencer": percentiles(costs),
+            "filter_only_baseline": percentiles(filter_costs),
+            "frames_out": sequencer.counters["frames_out"],
+            "dropped": sequencer.dropped,
+            "budget_used_at_1khz_p99": round(float(np.percentile(costs, 99)) / 0.001, 3),
+        }
+        print(
+            f"{name:9s} sequencer p50 {results[name]['sequencer']['p50_us']} us, "
+            f"p99 {results[name]['sequencer']['p99_us']} us (filter alone p50 "
+            f"{results[name]['filter_only_baseline']['p50_us']} us)",
+            flush=True,
+        )
     write_results("sequencer_bench", results, show=False)
 
 

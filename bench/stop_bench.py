@@ -9,6 +9,7 @@ stopJ's deceleration, 2 rad/s^2 by default, from the speed reached when STOP arr
 
 Run: bench/run stop_bench [--trials 20]; writes bench/results/stop_bench.json.
 """
+
 import argparse
 import os
 import sys
@@ -30,12 +31,17 @@ URDF = os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf")
 
 def stats(samples):
     ms = np.asarray(samples) * 1e3
-    return {"p50_ms": round(float(np.percentile(ms, 50)), 2), "p99_ms": round(float(np.percentile(ms, 99)), 2),
-            "max_ms": round(float(ms.max()), 2), "n": int(len(ms))}
+    return {
+        "p50_ms": round(float(np.percentile(ms, 50)), 2),
+        "p99_ms": round(float(np.percentile(ms, 99)), 2),
+        "max_ms": round(float(ms.max()), 2),
+        "n": int(len(ms)),
+    }
 
 
 def make(name):
     from hw_interface.registry import create_driver
+
     if name == "pybullet":
         driver = create_driver("pybullet", urdf_path=URDF, initial_joints=list(HOME), real_time=True)
         still = lambda: np.max(np.abs(driver.get_joint_velocities())) < 0.01
@@ -48,14 +54,18 @@ def make(name):
 
 def trial(dispatcher, driver, still, rng):
     from hw_interface.protocol import CommandIndex, Result
+
     answer = dispatcher.handle(CommandIndex.MOVE_J, joints=list(HOME))
     assert answer.result == Result.SUCCESS, answer.reason
     # STOP at a random moment 0.3-1.5 s into the move (accelerating or cruising).
     delay = rng.uniform(0.3, 1.5)
     began = time.monotonic()
-    runner, stop_at, stop_took = stop_during(lambda: dispatcher.handle(CommandIndex.MOVE_J, joints=list(LONG)),
-                                             lambda: time.monotonic() - began >= delay,
-                                             lambda: dispatcher.handle(CommandIndex.STOP), timeout=5.0)
+    runner, stop_at, stop_took = stop_during(
+        lambda: dispatcher.handle(CommandIndex.MOVE_J, joints=list(LONG)),
+        lambda: time.monotonic() - began >= delay,
+        lambda: dispatcher.handle(CommandIndex.STOP),
+        timeout=5.0,
+    )
     # Still: the first instant from which the arm stays still for 0.1 s.
     still_since = None
     while True:
@@ -78,6 +88,7 @@ def main():
     parser.add_argument("--trials", type=int, default=20, help="STOPs per driver (default 20)")
     args = parser.parse_args()
     from hw_interface.dispatcher import CommandDispatcher
+
     rng = np.random.default_rng(7)
     results = {}
     for name in ("pybullet", "ur_rtde_fake"):
@@ -93,12 +104,16 @@ def main():
                 to_still.append(t)
         finally:
             driver.disconnect()
-        results[name] = {"stop_request_to_stop_answer": stats(stop_answer),
-                         "stop_request_to_interrupted_move_answer": stats(move_answer),
-                         "stop_request_to_arm_still": stats(to_still)}
+        results[name] = {
+            "stop_request_to_stop_answer": stats(stop_answer),
+            "stop_request_to_interrupted_move_answer": stats(move_answer),
+            "stop_request_to_arm_still": stats(to_still),
+        }
     results["machine"] = {"cores": os.cpu_count()}
-    results["note"] = ("in-process through CommandDispatcher; the fake's time to still is stopJ's deceleration "
-                       "(2 rad/s^2) from the speed at the STOP")
+    results["note"] = (
+        "in-process through CommandDispatcher; the fake's time to still is stopJ's deceleration "
+        "(2 rad/s^2) from the speed at the STOP"
+    )
     write_results("stop_bench", results)
 
 

@@ -22,6 +22,7 @@ Runnable alone (needs a ROS master at ROS_MASTER_URI; e2e_latency starts its own
 
   bench/run transport_floor [--variant floor] [--count 1100] [--rate 110]
 """
+
 import argparse
 import json
 import os
@@ -65,12 +66,15 @@ def _dump(path, rows):
 def role_server(out, count, variant):
     """Serve /floor/controller (or subscribe /floor/joints): record now - request stamp."""
     import rospy
-    from motion_commander.srv import commander, commanderResponse
     from sensor_msgs.msg import JointState
+
+    from motion_commander.srv import commander, commanderResponse
+
     rows = []
     driver = None
     if variant == "sim_thread":
         from hw_interface.sim_driver import PybulletSimDriver
+
         driver = PybulletSimDriver(URDF, initial_joints=HOME)
         driver.login()
 
@@ -86,6 +90,7 @@ def role_server(out, count, variant):
     def on_joints(msg):
         accept(msg.position)
         rows.append(rospy.get_time() - msg.header.stamp.to_sec())
+
     if variant == "topic_last_hop":
         rospy.Subscriber("/floor/joints", JointState, on_joints, queue_size=10, tcp_nodelay=True)
     else:
@@ -99,14 +104,20 @@ def role_server(out, count, variant):
 def _core():
     """A TeleopCore configured as the session's (teleop.yaml, UR5e, auto clutch)."""
     import yaml
-    from motion_common.kinematics import RobotKinematics
+
     from motion_commander.config import load_teleop_config
     from motion_commander.teleop import TeleopMapper, make_clutch
     from motion_commander.teleop_core import TeleopCore
+    from motion_common.kinematics import RobotKinematics
+
     with open(os.path.join(ROOT, "src", "motion_commander", "config", "teleop.yaml"), encoding="utf-8") as fh:
         config = load_teleop_config(yaml.safe_load(fh))
-    core = TeleopCore(RobotKinematics(URDF, config.tool_frame), TeleopMapper(config.speed_ratio, np.eye(3)),
-                      make_clutch(config.engage, config.steady_frames, config.lost_after), config.safety)
+    core = TeleopCore(
+        RobotKinematics(URDF, config.tool_frame),
+        TeleopMapper(config.speed_ratio, np.eye(3)),
+        make_clutch(config.engage, config.steady_frames, config.lost_after),
+        config.safety,
+    )
     core.on_joint_state(HOME)
     return core
 
@@ -115,9 +126,11 @@ def role_caller(out, count, variant):
     """PoseStamped in, one persistent service call (or JointState) out per message."""
     import rospy
     from geometry_msgs.msg import PoseStamped
-    from motion_commander.srv import commander, commanderRequest
     from sensor_msgs.msg import JointState
     from std_msgs.msg import Bool
+
+    from motion_commander.srv import commander, commanderRequest
+
     core = _core() if variant == "core_work" else None
     if variant == "topic_last_hop":
         pub = rospy.Publisher("/floor/joints", JointState, queue_size=None, tcp_nodelay=True)
@@ -136,6 +149,7 @@ def role_caller(out, count, variant):
             request = commanderRequest(command_index=5, joints=joints)
             request.header.stamp = stamp
             proxy(request)
+
     rows, sent = [], []
 
     def on_pose(msg):
@@ -143,8 +157,9 @@ def role_caller(out, count, variant):
         joints = HOME
         if core is not None:
             p, o = msg.pose.position, msg.pose.orientation
-            command = core.on_hand_pose(msg.header.stamp.to_sec(), [p.x, p.y, p.z], [o.x, o.y, o.z, o.w],
-                                        now=rospy.get_time())
+            command = core.on_hand_pose(
+                msg.header.stamp.to_sec(), [p.x, p.y, p.z], [o.x, o.y, o.z, o.w], now=rospy.get_time()
+            )
             if command is None:
                 return  # engaging (the clutch's steady frames): nothing to send yet
             joints = command.joints.tolist()
@@ -153,6 +168,7 @@ def role_caller(out, count, variant):
         sent.append(1)
         if core is not None:
             core.prepare_next()  # the between-frames work, after the command (the node times it later)
+
     subscriber = rospy.Subscriber("/floor/pose", PoseStamped, on_pose, queue_size=10, tcp_nodelay=True)
     # The source starts only once this end of the chain is connected: a caller slow to
     # start (the core's imports) must not miss the first poses.
@@ -167,7 +183,9 @@ def role_relay(out, count, variant):
     """motion_sensor/hand in, PoseStamped out with the sensor stamp."""
     import rospy
     from geometry_msgs.msg import PoseStamped
+
     from motion_sensor.msg import hand
+
     pub = rospy.Publisher("/floor/pose", PoseStamped, queue_size=_queue(variant), tcp_nodelay=True)
     rows = []
 
@@ -178,6 +196,7 @@ def role_relay(out, count, variant):
         pose.pose.position = msg.position
         pose.pose.orientation = msg.orientation
         pub.publish(pose)
+
     rospy.Subscriber("/floor/hand", hand, on_hand, queue_size=10, tcp_nodelay=True)
     _spin_until(lambda: len(rows) >= count + extra_frames(variant), 180.0)
     _dump(out, rows)
@@ -186,6 +205,7 @@ def role_relay(out, count, variant):
 def recorded_hands():
     """The right hand's (position, orientation) of a real Leap recording, looped by the source."""
     from motion_sensor.devices.replay import load_samples
+
     samples, _ = load_samples(RECORDING)
     return [(s.position.tolist(), s.orientation.tolist()) for _, s in samples if s.hands_num]
 
@@ -193,8 +213,10 @@ def recorded_hands():
 def role_source(_out, count, rate, variant):
     """Publish ``count`` recorded hands at ``rate`` Hz once the chain is connected."""
     import rospy
-    from motion_sensor.msg import hand
     from std_msgs.msg import Bool
+
+    from motion_sensor.msg import hand
+
     pub = rospy.Publisher("/floor/hand", hand, queue_size=_queue(variant), tcp_nodelay=True)
     path = recorded_hands()
     ready = []
@@ -217,6 +239,7 @@ def role_source(_out, count, rate, variant):
 
 def _spin_until(condition, timeout):
     import rospy
+
     deadline = time.monotonic() + timeout
     while not rospy.is_shutdown() and not condition() and time.monotonic() < deadline:
         time.sleep(0.05)
@@ -225,8 +248,11 @@ def _spin_until(condition, timeout):
 def stats(seconds):
     """p50/p99 in ms of a list of seconds."""
     ms = np.asarray(seconds, dtype=float) * 1000.0
-    return {"p50": round(float(np.percentile(ms, 50)), 3), "p99": round(float(np.percentile(ms, 99)), 3),
-            "n": int(len(ms))}
+    return {
+        "p50": round(float(np.percentile(ms, 50)), 3),
+        "p99": round(float(np.percentile(ms, 99)), 3),
+        "n": int(len(ms)),
+    }
 
 
 def run_floor(count=1100, rate=110.0, env=None, variant="floor"):
@@ -234,8 +260,20 @@ def run_floor(count=1100, rate=110.0, env=None, variant="floor"):
     folder = tempfile.mkdtemp(prefix="floor-")
     procs = []
     for role in ROLES:
-        cmd = [sys.executable, os.path.abspath(__file__), "--role", role, "--count", str(count), "--rate", str(rate),
-               "--variant", variant, "--out", os.path.join(folder, f"{role}.json")]
+        cmd = [
+            sys.executable,
+            os.path.abspath(__file__),
+            "--role",
+            role,
+            "--count",
+            str(count),
+            "--rate",
+            str(rate),
+            "--variant",
+            variant,
+            "--out",
+            os.path.join(folder, f"{role}.json"),
+        ]
         procs.append(subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         time.sleep(0.3)
     for proc in procs:
@@ -244,8 +282,10 @@ def run_floor(count=1100, rate=110.0, env=None, variant="floor"):
     for role, hop in (("relay", "sensor->relay"), ("caller", "sensor->caller"), ("server", "sensor->server")):
         path = os.path.join(folder, f"{role}.json")
         if not os.path.exists(path):
-            raise RuntimeError(f"transport floor ({variant}): the {role} wrote no figures; run it alone with "
-                               f"bench/run transport_floor --variant {variant} to see its error")
+            raise RuntimeError(
+                f"transport floor ({variant}): the {role} wrote no figures; run it alone with "
+                f"bench/run transport_floor --variant {variant} to see its error"
+            )
         with open(path, encoding="utf-8") as fh:
             hops[hop] = stats(json.load(fh)[:count])
     return hops
@@ -261,16 +301,20 @@ def main():
     args = parser.parse_args()
     if args.role is None:
         hops = run_floor(args.count, args.rate, variant=args.variant)
-        print(f"floor ({args.variant}): p50={hops['sensor->server']['p50']} ms p99={hops['sensor->server']['p99']} ms "
-              f"(n={hops['sensor->server']['n']}); hops {hops}")
+        print(
+            f"floor ({args.variant}): p50={hops['sensor->server']['p50']} ms p99={hops['sensor->server']['p99']} ms "
+            f"(n={hops['sensor->server']['n']}); hops {hops}"
+        )
         return
     import rospy
+
     rospy.init_node(f"floor_{args.role}", disable_signals=True)
     if args.role == "source":
         role_source(args.out, args.count, args.rate, args.variant)
     else:
-        {"server": role_server, "caller": role_caller, "relay": role_relay}[args.role](args.out, args.count,
-                                                                                      args.variant)
+        {"server": role_server, "caller": role_caller, "relay": role_relay}[args.role](
+            args.out, args.count, args.variant
+        )
 
 
 if __name__ == "__main__":

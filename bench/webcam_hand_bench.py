@@ -12,6 +12,7 @@ ground truth in x and y, RMS pixel error) and the depth from apparent size again
 
 Run: bench/run webcam_hand_bench [--frames 150] [--seed 1]
 """
+
 import argparse
 import os
 import sys
@@ -71,6 +72,7 @@ def path_figures(sequence, pixels, depths):
 
 def plot(panels, path):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -102,8 +104,7 @@ def main():
     parser.add_argument("--frames", type=int, default=150, help="frames per sequence (default 150)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the warp paths (default 1)")
     args = parser.parse_args()
-    results = {"frames_per_sequence": args.frames, "seed": args.seed, "frame_size": [WIDTH, HEIGHT],
-               "sequences": {}}
+    results = {"frames_per_sequence": args.frames, "seed": args.seed, "frame_size": [WIDTH, HEIGHT], "sequences": {}}
     costs = {"tracking": [], "static": []}
     panels = []
     for k, name in enumerate(PHOTOS):
@@ -113,15 +114,20 @@ def main():
             cost, pixels, depths = run(sequence, static=(mode == "static"))
             costs[mode].append(cost)
             figures, truth = path_figures(sequence, pixels, depths)
-            entry[mode] = {"cost_ms_p50": round(float(np.percentile(cost, 50)), 2),
-                           "cost_ms_p99": round(float(np.percentile(cost, 99)), 2), **figures}
+            entry[mode] = {
+                "cost_ms_p50": round(float(np.percentile(cost, 50)), 2),
+                "cost_ms_p99": round(float(np.percentile(cost, 99)), 2),
+                **figures,
+            }
             if mode == "tracking" and truth is not None:
                 panels.append((name, sequence, pixels, depths, truth))
-            print(f"{name:24s} {mode:8s} cost p50 {entry[mode]['cost_ms_p50']:6.2f} ms  p99 "
-                  f"{entry[mode]['cost_ms_p99']:6.2f} ms  found {figures['detection_rate']:.1%}  "
-                  f"corr x/y {figures.get('corr_x', float('nan')):.3f}/{figures.get('corr_y', float('nan')):.3f}  "
-                  f"rms {figures.get('rms_px', float('nan')):.1f} px  depth corr "
-                  f"{figures.get('corr_depth_inverse_scale', float('nan')):.3f}")
+            print(
+                f"{name:24s} {mode:8s} cost p50 {entry[mode]['cost_ms_p50']:6.2f} ms  p99 "
+                f"{entry[mode]['cost_ms_p99']:6.2f} ms  found {figures['detection_rate']:.1%}  "
+                f"corr x/y {figures.get('corr_x', float('nan')):.3f}/{figures.get('corr_y', float('nan')):.3f}  "
+                f"rms {figures.get('rms_px', float('nan')):.1f} px  depth corr "
+                f"{figures.get('corr_depth_inverse_scale', float('nan')):.3f}"
+            )
         results["sequences"][name] = entry
     for mode in costs:
         all_costs = np.concatenate(costs[mode])
@@ -135,8 +141,10 @@ def main():
     write_results("webcam_hand_bench", results, show=False)
     print(f"=== webcam hand bench ({args.frames} frames x {len(PHOTOS)} sequences, 640x480) ===")
     print(f"tracking mode  p50 / p99 : {results['tracking_cost_ms_p50']} / {results['tracking_cost_ms_p99']} ms")
-    print(f"static mode    p50 / p99 : {results['static_cost_ms_p50']} / {results['static_cost_ms_p99']} ms "
-          f"(x{results['static_over_tracking_p50']} of tracking, same run)")
+    print(
+        f"static mode    p50 / p99 : {results['static_cost_ms_p50']} / {results['static_cost_ms_p99']} ms "
+        f"(x{results['static_over_tracking_p50']} of tracking, same run)"
+    )
     print(f"plot                     : {png}")
 
 

@@ -4,6 +4,7 @@ docs/interfaces.md from them. ``scripts/gen_interfaces`` runs it; the unit tests
 
 Usage: scripts/gen_interfaces [--check]   (--check: exit 1 when docs/interfaces.md is stale)
 """
+
 import importlib
 import os
 import sys
@@ -25,6 +26,7 @@ def all_interfaces():
 def render() -> str:
     """The text docs/interfaces.md must hold."""
     from motion_common.interface import interfaces_markdown
+
     text = interfaces_markdown(all_interfaces())
     # Defaults that are paths in this clone are shown from the project root, so the file is
     # the same in every clone (catkin_ws/src/PKG is a link to src/PKG).
@@ -43,6 +45,7 @@ def main(argv) -> int:
             print(f"{DOC} is stale: run scripts/gen_interfaces", file=sys.stderr)
         return 1 if stale else 0
     from motion_common.atomic_file import write_atomic
+
     write_atomic(DOC, text)
     print(f"wrote {DOC} ({len(all_interfaces())} nodes)")
     return 0

@@ -17,6 +17,7 @@ and prints the session summary:
 Namespace and interface names are unique per run; everything started in them is stopped
 and the namespaces deleted on exit, whatever happens.
 """
+
 import argparse
 import json
 import os
@@ -37,8 +38,10 @@ RECORDING = os.path.join(ROOT, "tests", "data", "test-paddle-rightwards.jsonl.gz
 
 # Runs argv inside a namespace with the workspace sourced and this side's ROS addresses.
 # setup.bash reads the caller's arguments, so they are hidden while it runs.
-_WRAPPER = ('m="$1"; i="$2"; shift 2; a=("$@"); set --; source "' + SETUP + '"; '
-            'export ROS_MASTER_URI="$m" ROS_IP="$i"; unset ROS_HOSTNAME; exec "${a[@]}"')
+_WRAPPER = (
+    'm="$1"; i="$2"; shift 2; a=("$@"); set --; source "' + SETUP + '"; '
+    'export ROS_MASTER_URI="$m" ROS_IP="$i"; unset ROS_HOSTNAME; exec "${a[@]}"'
+)
 
 
 def netns_unavailable():
@@ -97,8 +100,19 @@ class TwoMachines:
         """Start argv in ``side``'s namespace (own process group); output to LOG_DIR/name.log."""
         env = dict(os.environ, ROS_HOME=os.path.join(self.log_dir, "ros-" + side))
         log = open(os.path.join(self.log_dir, name + ".log"), "w", encoding="utf-8")
-        cmd = ["ip", "netns", "exec", self.ns[side], "bash", "-c", _WRAPPER, "bash", self.master_uri,
-               self.ips[side], *argv]
+        cmd = [
+            "ip",
+            "netns",
+            "exec",
+            self.ns[side],
+            "bash",
+            "-c",
+            _WRAPPER,
+            "bash",
+            self.master_uri,
+            self.ips[side],
+            *argv,
+        ]
         proc = subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
         log.close()
         self.procs.append((side, name, proc))
@@ -106,14 +120,16 @@ class TwoMachines:
 
     def wait_for_master(self, timeout=60.0):
         """Block until the sensor side reaches the master over the link; False on timeout."""
-        probe = ("import sys, time, rosgraph\n"
-                 "deadline = time.time() + float(sys.argv[1])\n"
-                 "while time.time() < deadline:\n"
-                 "    try:\n"
-                 "        rosgraph.Master('/netns_probe').getPid(); sys.exit(0)\n"
-                 "    except Exception:\n"
-                 "        time.sleep(0.2)\n"
-                 "sys.exit(1)\n")
+        probe = (
+            "import sys, time, rosgraph\n"
+            "deadline = time.time() + float(sys.argv[1])\n"
+            "while time.time() < deadline:\n"
+            "    try:\n"
+            "        rosgraph.Master('/netns_probe').getPid(); sys.exit(0)\n"
+            "    except Exception:\n"
+            "        time.sleep(0.2)\n"
+            "sys.exit(1)\n"
+        )
         proc = self.spawn("sensor", "master_probe", [PYTHON, "-c", probe, str(timeout)])
         return proc.wait(timeout=timeout + 30) == 0
 
@@ -160,13 +176,31 @@ def start_session(pair, recording, watchers=(), robot_args=(), sensor_args=()):
     the link, the ``watchers`` ((name, argv) pairs) on the robot side, then sensing.launch
     device:=replay on the sensor side. Returns the watchers' processes; raises if the master
     never answers."""
-    pair.spawn("robot", "robot_pc", ["roslaunch", "-p", str(pair.port), os.path.join(ROOT, "src", "motion_bringup", "launch", "robot_pc.launch"),
-                                     *robot_args])
+    pair.spawn(
+        "robot",
+        "robot_pc",
+        [
+            "roslaunch",
+            "-p",
+            str(pair.port),
+            os.path.join(ROOT, "src", "motion_bringup", "launch", "robot_pc.launch"),
+            *robot_args,
+        ],
+    )
     if not pair.wait_for_master(90.0):
         raise RuntimeError("the master on the robot side never answered over the link:\n" + pair.log_tail("robot_pc"))
     procs = [pair.spawn("robot", name, argv) for name, argv in watchers]
-    pair.spawn("sensor", "sensing", ["roslaunch", os.path.join(ROOT, "src", "motion_bringup", "launch", "sensing.launch"), "device:=replay",
-                                     f"recording:={recording}", *sensor_args])
+    pair.spawn(
+        "sensor",
+        "sensing",
+        [
+            "roslaunch",
+            os.path.join(ROOT, "src", "motion_bringup", "launch", "sensing.launch"),
+            "device:=replay",
+            f"recording:={recording}",
+            *sensor_args,
+        ],
+    )
     return procs
 
 
@@ -176,16 +210,35 @@ def run_monitored_session(recording, log_dir, port=PORT, timeout=180.0, repeat=1
     out = os.path.join(log_dir, "output")
     os.makedirs(out, exist_ok=True)
     with TwoMachines(log_dir, port) as pair:
-        monitor, = start_session(pair, recording, watchers=[(
-            # nice 19, as in teleop_sim.launch: the observer never takes a core from the chain.
-            "session_monitor", ["nice", "-n", "19", "rosrun", "motion_commander", "session_monitor",
-                                f"_output_dir:={out}", "_title:=two machines, " + os.path.basename(recording)])],
-            sensor_args=[f"repeat:={repeat}"])
+        (monitor,) = start_session(
+            pair,
+            recording,
+            watchers=[
+                (
+                    # nice 19, as in teleop_sim.launch: the observer never takes a core from the chain.
+                    "session_monitor",
+                    [
+                        "nice",
+                        "-n",
+                        "19",
+                        "rosrun",
+                        "motion_commander",
+                        "session_monitor",
+                        f"_output_dir:={out}",
+                        "_title:=two machines, " + os.path.basename(recording),
+                    ],
+                )
+            ],
+            sensor_args=[f"repeat:={repeat}"],
+        )
         try:
             code = monitor.wait(timeout=timeout * repeat)
         except subprocess.TimeoutExpired:
-            raise RuntimeError(f"session_monitor did not report within {timeout:.0f} s:\n"
-                               + pair.log_tail("session_monitor") + pair.log_tail("sensing")) from None
+            raise RuntimeError(
+                f"session_monitor did not report within {timeout:.0f} s:\n"
+                + pair.log_tail("session_monitor")
+                + pair.log_tail("sensing")
+            ) from None
         if code != 0:
             raise RuntimeError(f"session_monitor exited with {code}:\n" + pair.log_tail("session_monitor"))
     with open(os.path.join(out, "session_summary.json"), encoding="utf-8") as fh:
@@ -206,9 +259,11 @@ def main():
     start = time.time()
     summary = run_monitored_session(args.recording, logs, args.port)
     print(f"two machines ({ROBOT_IP} robot, {SENSOR_IP} sensor), {time.time() - start:.0f} s; logs in {logs}")
-    print(f"sensor->driver p50 {summary['latency_p50_ms']} ms, p99 {summary['latency_p99_ms']} ms "
-          f"({summary['latency_samples']} commands, frames in {summary['frames_in']}, "
-          f"out {summary['frames_out']}, dropped {summary['frames_dropped']})")
+    print(
+        f"sensor->driver p50 {summary['latency_p50_ms']} ms, p99 {summary['latency_p99_ms']} ms "
+        f"({summary['latency_samples']} commands, frames in {summary['frames_in']}, "
+        f"out {summary['frames_out']}, dropped {summary['frames_dropped']})"
+    )
 
 
 if __name__ == "__main__":

@@ -1,5 +1,6 @@
 """Python package of the motion_commander catkin package (installed by catkin_python_setup)."""
-from setuptools import setup
+
 from catkin_pkg.python_setup import generate_distutils_setup
+from setuptools import setup
 
 setup(**generate_distutils_setup(packages=["motion_commander"], package_dir={"": "."}))

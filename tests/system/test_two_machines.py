@@ -11,6 +11,7 @@ Needs root and `ip netns` (CI runs as root); skipped with the reason otherwise. 
 catkin_ws/devel/setup.bash itself. About 15-25 s. Run with the ROS lock held:
   flock /tmp/ros.lock .venv/bin/python -m pytest tests/system/test_two_machines.py
 """
+
 import json
 import os
 import sys
@@ -34,10 +35,20 @@ def session(tmp_path_factory):
         pytest.skip(f"two network namespaces cannot be made here: {reason}")
     logs = str(tmp_path_factory.mktemp("two_machines"))
     out = os.path.join(logs, "check.json")
-    argv = [two_machines.PYTHON, CHECK, "--out", out, "--sensor-ip", two_machines.SENSOR_IP,
-            "--commands", str(COMMANDS), "--timeout", str(TIMEOUT)]
+    argv = [
+        two_machines.PYTHON,
+        CHECK,
+        "--out",
+        out,
+        "--sensor-ip",
+        two_machines.SENSOR_IP,
+        "--commands",
+        str(COMMANDS),
+        "--timeout",
+        str(TIMEOUT),
+    ]
     with two_machines.TwoMachines(logs) as pair:
-        checker, = two_machines.start_session(pair, two_machines.RECORDING, watchers=[("check", argv)])
+        (checker,) = two_machines.start_session(pair, two_machines.RECORDING, watchers=[("check", argv)])
         checker.wait(timeout=4 * TIMEOUT + 30)
         tails = {name: pair.log_tail(name) for name in ("check", "robot_pc", "sensing")}
     assert os.path.exists(out), "the checker wrote nothing:\n" + "\n".join(f"--- {k}\n{v}" for k, v in tails.items())

@@ -30,6 +30,7 @@ the plain baseline (centred and scaled 3-D DTW 1-NN, dtaidistance, no resampling
 window) scores about 93-97 % on 10 train / 10 test subjects, 1 repetition each (see
 bench/results/gesture_bench.json). Not real data: a harder stand-in, still synthetic.
 """
+
 import numpy as np
 
 # Unistroke control points (x, y) in [0, 1]^2, y up; one stroke per letter.
@@ -100,6 +101,7 @@ def _warp_field(rng, amplitude, terms=3):
                 arg = np.pi * (freq[k, axis, 0] * xy[:, 0] + freq[k, axis, 1] * xy[:, 1]) + phase[k, axis]
                 out[:, axis] += amp[k, axis] * np.sin(arg)
         return out
+
     return warp
 
 
@@ -113,14 +115,24 @@ def subject_style(rng, difficulty=1.0):
     """One synthetic writer's style (see the module docstring)."""
     d = difficulty * CALIBRATION
     return {
-        "size": rng.uniform(40, 180), "aspect": np.exp(rng.uniform(-0.35, 0.35) * d),
-        "slant": rng.uniform(-0.35, 0.35) * d, "roll": rng.uniform(-0.25, 0.25) * d,
-        "pitch": rng.uniform(-0.6, 0.6) * d, "yaw": rng.uniform(-0.6, 0.6) * d,
-        "bow": rng.uniform(0.0, 0.004) * d, "speed": rng.uniform(0.2, 0.7),
-        "corner_slow": rng.uniform(0.5, 4.0), "pause_prob": rng.uniform(0.0, 0.4), "pause_ms": rng.uniform(60, 250),
-        "rounding": int(rng.integers(2, 12)), "jitter": rng.uniform(0.02, 0.05) * d,
-        "warp": rng.uniform(0.03, 0.09) * d, "hook": rng.uniform(0.0, 0.25) * d,
-        "tremor": rng.uniform(0.2, 1.2), "rate": rng.uniform(50, 120), "drop": rng.uniform(0.0, 0.06),
+        "size": rng.uniform(40, 180),
+        "aspect": np.exp(rng.uniform(-0.35, 0.35) * d),
+        "slant": rng.uniform(-0.35, 0.35) * d,
+        "roll": rng.uniform(-0.25, 0.25) * d,
+        "pitch": rng.uniform(-0.6, 0.6) * d,
+        "yaw": rng.uniform(-0.6, 0.6) * d,
+        "bow": rng.uniform(0.0, 0.004) * d,
+        "speed": rng.uniform(0.2, 0.7),
+        "corner_slow": rng.uniform(0.5, 4.0),
+        "pause_prob": rng.uniform(0.0, 0.4),
+        "pause_ms": rng.uniform(60, 250),
+        "rounding": int(rng.integers(2, 12)),
+        "jitter": rng.uniform(0.02, 0.05) * d,
+        "warp": rng.uniform(0.03, 0.09) * d,
+        "hook": rng.uniform(0.0, 0.25) * d,
+        "tremor": rng.uniform(0.2, 1.2),
+        "rate": rng.uniform(50, 120),
+        "drop": rng.uniform(0.0, 0.06),
         "personal": {},  # per-letter persistent control-point offsets, filled lazily
         "personal_scale": rng.uniform(0.02, 0.06) * d,
     }
@@ -129,8 +141,10 @@ def subject_style(rng, difficulty=1.0):
 def _personal(letter, style, rng_subject):
     if letter not in style["personal"]:
         n = len(LETTERS[letter])
-        style["personal"][letter] = (rng_subject.normal(0, style["personal_scale"], (n, 2)),
-                                     _warp_field(rng_subject, style["warp"]))
+        style["personal"][letter] = (
+            rng_subject.normal(0, style["personal_scale"], (n, 2)),
+            _warp_field(rng_subject, style["warp"]),
+        )
     return style["personal"][letter]
 
 
@@ -173,12 +187,15 @@ def perform(letter, style, rng, rate_hz=None, difficulty=1.0, personal=None):
     size = style["size"] * rng.uniform(0.8, 1.2)
     xyz = np.column_stack([x, y, depth]) * size
     # Writing plane: tilted per subject and per repetition, bowed, drifting in depth.
-    rot = _rotation(style["pitch"] + rng.normal(0, 0.14 * d), style["yaw"] + rng.normal(0, 0.14 * d),
-                    style["roll"] + rng.normal(0, 0.08 * d))
+    rot = _rotation(
+        style["pitch"] + rng.normal(0, 0.14 * d),
+        style["yaw"] + rng.normal(0, 0.14 * d),
+        style["roll"] + rng.normal(0, 0.08 * d),
+    )
     xyz = xyz @ rot.T
     xyz[:, 2] -= style["bow"] * (xyz[:, 0] ** 2 + 0.5 * xyz[:, 1] ** 2)
     drift = np.linspace(0, 1, len(xyz))
-    xyz[:, 2] += rng.normal(0, 12 * d) * drift + rng.normal(0, 8 * d) * drift ** 2
+    xyz[:, 2] += rng.normal(0, 12 * d) * drift + rng.normal(0, 8 * d) * drift**2
     xyz[:, 1] += rng.normal(0, 5 * d) * drift
     # Speed along the stroke: slower at corners, smooth random time warp, corner pauses.
     step = np.linalg.norm(np.diff(xyz, axis=0), axis=1)
@@ -186,8 +203,9 @@ def perform(letter, style, rng, rate_hz=None, difficulty=1.0, personal=None):
     turn = np.concatenate([[0.0], np.arccos(np.clip(np.sum(direction[1:] * direction[:-1], axis=1), -1, 1)), [0.0]])
     turn = _smooth(turn[:, None], 9)[:, 0]
     u = np.linspace(0, 1, len(xyz))
-    warp = np.exp(0.5 * d * sum(rng.normal(0, 0.5) * np.sin((k + 1) * np.pi * u + rng.uniform(0, 6.3))
-                                for k in range(3)))
+    warp = np.exp(
+        0.5 * d * sum(rng.normal(0, 0.5) * np.sin((k + 1) * np.pi * u + rng.uniform(0, 6.3)) for k in range(3))
+    )
     speed = style["speed"] * rng.uniform(0.75, 1.3) * warp / (1.0 + style["corner_slow"] * turn * 8.0)
     speed *= np.clip(np.minimum(u, 1 - u) * 12 + 0.3, 0.3, 1.0)  # accelerate / decelerate
     seg_speed = 0.5 * (speed[1:] + speed[:-1])
@@ -211,7 +229,7 @@ def perform(letter, style, rng, rate_hz=None, difficulty=1.0, personal=None):
     keep = rng.random(n) >= style["drop"]
     if rng.random() < 0.3 * d and n > 30:  # a burst of lost frames
         start = int(rng.integers(5, n - 10))
-        keep[start:start + int(rng.integers(2, 6))] = False
+        keep[start : start + int(rng.integers(2, 6))] = False
     keep[[0, -1]] = True
     path, times = path[keep], times[keep]
     offset = rng.uniform([-80, 150, -60], [80, 300, 60])

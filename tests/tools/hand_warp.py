@@ -7,9 +7,9 @@ is proportional to ``scales[i]`` (so its depth to 1 / scales[i]).
 
 Used by tests/unit/motion_sensor/test_webcam_hand_images.py and bench/webcam_hand_bench.py.
 """
+
 import os
 from dataclasses import dataclass
-from typing import List
 
 import cv2
 import numpy as np
@@ -20,8 +20,9 @@ WIDTH, HEIGHT = 640, 480
 # Per photo: the scale at which it fills the canvas sensibly, the travel of the path.
 PHOTOS = {
     "handSrc": dict(file="handSrc.jpg", base_scale=0.6, travel_px=(90, 45), scale_range=0.25, turn_deg=12.0),
-    "Back_Projection_Theory0": dict(file="Back_Projection_Theory0.jpg", base_scale=1.6, travel_px=(140, 70),
-                                    scale_range=0.25, turn_deg=12.0),
+    "Back_Projection_Theory0": dict(
+        file="Back_Projection_Theory0.jpg", base_scale=1.6, travel_px=(140, 70), scale_range=0.25, turn_deg=12.0
+    ),
 }
 
 
@@ -31,7 +32,7 @@ class WarpedSequence:
     pixels to frame pixels, ``scales``, ``angles_deg``."""
 
     name: str
-    frames: List[np.ndarray]
+    frames: list[np.ndarray]
     transforms: np.ndarray
     scales: np.ndarray
     angles_deg: np.ndarray
@@ -78,8 +79,15 @@ def warped_sequence(name: str, frames: int = 60, seed: int = 0, period_frames: f
         matrix = cv2.getRotationMatrix2D((w / 2.0, h / 2.0), angles[i], scales[i])
         # Photo centre to canvas centre, then the path's translation.
         matrix[:, 2] += np.array([WIDTH / 2.0 - w / 2.0 + tx[i], HEIGHT / 2.0 - h / 2.0 + ty[i]])
-        images.append(cv2.warpAffine(photo, matrix, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR,
-                                     borderMode=cv2.BORDER_CONSTANT, borderValue=border))
+        images.append(
+            cv2.warpAffine(
+                photo,
+                matrix,
+                (WIDTH, HEIGHT),
+                flags=cv2.INTER_LINEAR,
+                borderMode=cv2.BORDER_CONSTANT,
+                borderValue=border,
+            )
+        )
         transforms.append(matrix)
-    return WarpedSequence(name=name, frames=images, transforms=np.array(transforms), scales=scales,
-                          angles_deg=angles)
+    return WarpedSequence(name=name, frames=images, transforms=np.array(transforms), scales=scales, angles_deg=angles)

@@ -10,6 +10,7 @@ as seen by an operator facing forward: "right" is -y, "up" is +z; the circle is 
 clockwise as the operator sees it, in the vertical y-z plane. Files: <DIR>/<label>/<n>.csv
 with rows "x y z t" (mm, ms), see motion_sensor.gestures.gesture_templates.
 """
+
 import argparse
 import os
 import sys
@@ -60,9 +61,15 @@ def write_templates(out, count=8, seed=17):
             rng = np.random.default_rng([seed, li, i])
             path, times = gesture_path(label, rng)
             target = os.path.join(out, label, f"{i + 1:03d}.csv")
-            write_atomic(target, format_path(path * 1000.0, times * 1000.0,
-                                             f"gesture {label}; synthetic, tests/tools/make_gesture_templates.py "
-                                             f"seed {seed}\naxes REP 103 (x forward, y left, z up), palm"))
+            write_atomic(
+                target,
+                format_path(
+                    path * 1000.0,
+                    times * 1000.0,
+                    f"gesture {label}; synthetic, tests/tools/make_gesture_templates.py "
+                    f"seed {seed}\naxes REP 103 (x forward, y left, z up), palm",
+                ),
+            )
             written.append(target)
     return written
 

@@ -12,6 +12,7 @@ YAML one. No operator's recording is involved; the gestures' own tests cover tho
 
 Run: .venv/bin/python tests/tools/make_kitting_slot_program.py
 """
+
 import os
 import sys
 
@@ -28,12 +29,18 @@ from motion_common.kinematics import RobotKinematics, pose_to_se3, se3_to_pose  
 
 OUTPUT = os.path.join(ROOT, "tests", "data", "kitting_taught_slots.yaml")
 # m, taught magnet point minus the YAML slot centre, per class.
-OFFSETS = {"bolt_yellow": (0.006, -0.004), "nut_yellow": (-0.005, 0.007), "washer_yellow": (0.008, 0.003),
-           "bolt_silver": (-0.007, -0.006), "nut_silver": (0.004, 0.008), "washer_silver": (-0.003, -0.008)}
+OFFSETS = {
+    "bolt_yellow": (0.006, -0.004),
+    "nut_yellow": (-0.005, 0.007),
+    "washer_yellow": (0.008, 0.003),
+    "bolt_silver": (-0.007, -0.006),
+    "nut_silver": (0.004, 0.008),
+    "washer_silver": (-0.003, -0.008),
+}
 ORDER = ("nut_silver", "bolt_yellow", "washer_silver", "nut_yellow", "bolt_silver", "washer_yellow")
-TOOL_DOWN = [1.0, 0.0, 0.0, 0.0]   # tool0 z axis pointing down
-RELEASE_ABOVE_TRAY = 0.10          # m, magnet face above the tray floor at the release
-BELT_PICK = (-0.25,)               # m, x on the belt where the operator grips
+TOOL_DOWN = [1.0, 0.0, 0.0, 0.0]  # tool0 z axis pointing down
+RELEASE_ABOVE_TRAY = 0.10  # m, magnet face above the tray floor at the release
+BELT_PICK = (-0.25,)  # m, x on the belt where the operator grips
 START = [0.0, -1.5707963, 1.5707963, -1.5707963, -1.5707963, 0.0]
 
 
@@ -43,8 +50,8 @@ def main() -> int:
     state = {"joints": np.array(START)}
 
     def move_magnet_to(point):
-        target = np.asarray(point, float) + [0.0, 0.0, cell.gripper.tcp_length]   # tool0, z down
-        for seed in (state["joints"], START):   # the arm's pose first; the start pose if that is stuck
+        target = np.asarray(point, float) + [0.0, 0.0, cell.gripper.tcp_length]  # tool0, z down
+        for seed in (state["joints"], START):  # the arm's pose first; the start pose if that is stuck
             result = kinematics.solve_ik(pose_to_se3(target, TOOL_DOWN), seed, max_iterations=500)
             if result.success:
                 break
@@ -57,8 +64,9 @@ def main() -> int:
         return list(position), list(orientation), list(state["joints"])
 
     folder, name = os.path.split(OUTPUT)
-    session = TeachSession(cell.robot, robot_state, programs_dir=folder, program_name=name[:-len(".yaml")],
-                           clock=lambda: 0.0)
+    session = TeachSession(
+        cell.robot, robot_state, programs_dir=folder, program_name=name[: -len(".yaml")], clock=lambda: 0.0
+    )
     floor = cell.tray.position[2]
     for class_name in ORDER:
         center = cell.tray.slot_for(class_name).center

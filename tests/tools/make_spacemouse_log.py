@@ -7,6 +7,7 @@ truncated report at 2.5; 3.5 back to rest; 4.5 button released; 5.5 end.
 
 Run: .venv/bin/python tests/tools/make_spacemouse_log.py
 """
+
 import os
 import struct
 import sys

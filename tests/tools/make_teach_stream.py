@@ -19,6 +19,7 @@ id is made constant (one hand throughout) and frames are re-stamped at 110 fps.
 
 Run: .venv/bin/python tests/tools/make_teach_stream.py [--output PATH] (deterministic).
 """
+
 import argparse
 import gzip
 import json
@@ -33,8 +34,15 @@ FPS = 110.0
 # REP 103 (x forward, y left, z up) -> Leap (x right, y up, z toward the operator), mm.
 REP103_TO_LEAP = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]) * 1000.0
 HAND_ORIGIN_LEAP = np.array([0.0, 200.0, 0.0])  # mm, where the palm starts above the device
-POINT_KEYS = ("tipPosition", "dipPosition", "pipPosition", "mcpPosition", "btipPosition", "carpPosition",
-              "stabilizedTipPosition")
+POINT_KEYS = (
+    "tipPosition",
+    "dipPosition",
+    "pipPosition",
+    "mcpPosition",
+    "btipPosition",
+    "carpPosition",
+    "stabilizedTipPosition",
+)
 HAND_KEYS = ("palmPosition", "stabilizedPalmPosition", "sphereCenter")
 
 # Tool displacements from the engage pose (m, robot base = device axes, speed_ratio 1):
@@ -45,33 +53,33 @@ ABOVE_PART = np.array([-0.50, -0.20, 0.33]) - START
 AT_PART = np.array([-0.50, -0.20, 0.238]) - START
 ABOVE_PLACE = np.array([-0.45, 0.10, 0.33]) - START
 AT_PLACE = np.array([-0.45, 0.10, 0.240]) - START
-SAVE_POINT = np.array([-0.45, 0.10, 0.46]) - START   # clear above the cell: the circle stays off the table
+SAVE_POINT = np.array([-0.45, 0.10, 0.46]) - START  # clear above the cell: the circle stays off the table
 
 # (shape, seconds, displacement at the end of the segment or None to stay).
 # Shapes: open, fist, closing, opening, pinch, pinching, unpinching.
 SCRIPT = [
-    ("open", 2.0, None),                # enter, engage, hold still: waypoint at the start
+    ("open", 2.0, None),  # enter, engage, hold still: waypoint at the start
     ("open", 1.6, ABOVE_PART),
-    ("open", 1.6, None),                # hold: waypoint above the part
+    ("open", 1.6, None),  # hold: waypoint above the part
     ("open", 1.4, AT_PART),
-    ("open", 1.6, None),                # hold: waypoint at the part
-    ("closing", None, None),            # the grab recording's hand closing
-    ("fist", 0.8, None),                # fist held: grip
+    ("open", 1.6, None),  # hold: waypoint at the part
+    ("closing", None, None),  # the grab recording's hand closing
+    ("fist", 0.8, None),  # fist held: grip
     ("fist", 1.2, ABOVE_PART),
-    ("fist", 1.6, None),                # hold: waypoint (lifted)
+    ("fist", 1.6, None),  # hold: waypoint (lifted)
     ("fist", 1.8, ABOVE_PLACE),
-    ("fist", 1.6, None),                # hold: waypoint above the place
+    ("fist", 1.6, None),  # hold: waypoint above the place
     ("fist", 1.4, AT_PLACE),
-    ("fist", 1.4, None),                # hold: waypoint at the place
-    ("opening", None, None),            # the grab recording's hand opening
-    ("open", 1.2, None),                # open palm held: release
+    ("fist", 1.4, None),  # hold: waypoint at the place
+    ("opening", None, None),  # the grab recording's hand opening
+    ("open", 1.2, None),  # open palm held: release
     ("open", 1.2, ABOVE_PLACE),
-    ("open", 1.6, None),                # hold: waypoint (retreat)
-    ("open", 1.2, SAVE_POINT),          # up and clear of the cell before drawing
-    ("pinching", None, None),           # the pinch recording's fingers closing
-    ("circle", 1.1, None),              # pinch held while drawing a circle: save
+    ("open", 1.6, None),  # hold: waypoint (retreat)
+    ("open", 1.2, SAVE_POINT),  # up and clear of the cell before drawing
+    ("pinching", None, None),  # the pinch recording's fingers closing
+    ("circle", 1.1, None),  # pinch held while drawing a circle: save
     ("unpinching", None, None),
-    ("open", 0.3, None),                # and the hand leaves
+    ("open", 0.3, None),  # and the hand leaves
 ]
 CIRCLE_RADIUS = 0.06  # m
 
@@ -91,7 +99,7 @@ def tremor(frames, window_s=0.3):
     """Each frame's palm minus its moving average (mm): the hand's real jitter, no drift."""
     palms = np.array([f["hands"][0]["palmPosition"] for f in frames], dtype=float)
     half = max(1, int(window_s * FPS / 2))
-    smooth = np.array([palms[max(0, i - half):i + half + 1].mean(axis=0) for i in range(len(palms))])
+    smooth = np.array([palms[max(0, i - half) : i + half + 1].mean(axis=0) for i in range(len(palms))])
     return palms - smooth
 
 
@@ -101,7 +109,7 @@ def select(frames, keep):
 
 def min_jerk(fraction):
     f = np.clip(fraction, 0.0, 1.0)
-    return 10 * f ** 3 - 15 * f ** 4 + 6 * f ** 5
+    return 10 * f**3 - 15 * f**4 + 6 * f**5
 
 
 class Sources:
@@ -117,8 +125,9 @@ class Sources:
         pinch_t -= pinch_t[0]
         span = lambda t, a, b: [i for i in range(len(t)) if a <= t[i] <= b]  # noqa: E731
         self.pools = {
-            "open": [("grab", i) for i in select(grab, lambda h: h["grabStrength"] <= 0.02
-                                                 and h["pinchStrength"] <= 0.02)],
+            "open": [
+                ("grab", i) for i in select(grab, lambda h: h["grabStrength"] <= 0.02 and h["pinchStrength"] <= 0.02)
+            ],
             "fist": [("grab", i) for i in select(grab, lambda h: h["grabStrength"] >= 0.98)],
             "closing": [("grab", i) for i in span(grab_t, 0.25, 0.63)],
             "opening": [("grab", i) for i in span(grab_t, 1.08, 1.49)],
@@ -156,8 +165,9 @@ def build():
                 angle = np.pi / 2 - 2 * np.pi * min_jerk(fraction)
                 offset = offset + CIRCLE_RADIUS * np.array([0.0, -np.cos(angle), np.sin(angle) - 1.0])
             source, jitter = sources.frame(shape, k)
-            lines.append(json.dumps(relocate(source, HAND_ORIGIN_LEAP + REP103_TO_LEAP @ offset + jitter,
-                                             stamp_us, frame_id)))
+            lines.append(
+                json.dumps(relocate(source, HAND_ORIGIN_LEAP + REP103_TO_LEAP @ offset + jitter, stamp_us, frame_id))
+            )
             stamp_us += 1e6 / FPS
             frame_id += 1
     return lines
@@ -181,8 +191,14 @@ def relocate(frame, palm, stamp_us, frame_id):
             if key in pointable:
                 pointable[key] = [round(float(v), 4) for v in np.array(pointable[key], dtype=float) + shift]
         pointables.append(pointable)
-    return {"id": frame_id, "timestamp": int(stamp_us), "currentFrameRate": FPS, "hands": [hand],
-            "pointables": pointables, "gestures": []}
+    return {
+        "id": frame_id,
+        "timestamp": int(stamp_us),
+        "currentFrameRate": FPS,
+        "hands": [hand],
+        "pointables": pointables,
+        "gestures": [],
+    }
 
 
 def main():

@@ -5,6 +5,7 @@ tests/tools/hand_warp.py, 60 frames at 15 fps (4 s), MJPG in AVI.
 
 Run: .venv/bin/python tests/tools/make_webcam_video.py [--output FILE]
 """
+
 import argparse
 import os
 

@@ -6,6 +6,7 @@ never sleeps and hopes. Writes what it saw to --out (JSON) and exits 0 when all 
 
 usage: two_machines_check.py --out FILE --sensor-ip IP [--commands 100] [--timeout 60]
 """
+
 import argparse
 import json
 import sys
@@ -84,14 +85,23 @@ def check(args):
     seen["enough_commands"] = watch.enough.wait(args.timeout)
     with watch.lock:
         tools = np.array(watch.tools) if watch.tools else np.zeros((0, 3))
-        seen.update(accepted=len(watch.latencies), refused=sorted(set(watch.refused)),
-                    engaged=bool(ENGAGED & set(watch.statuses)),
-                    latency_p50_ms=round(float(np.median(watch.latencies)) * 1000, 3) if watch.latencies else None,
-                    tool_travel_mm=round(float(np.ptp(tools, axis=0).max()) * 1000, 1) if len(tools) else 0.0)
-    seen["ok"] = bool(seen["ready"] and seen["motion_states_arrived"] and seen["enough_commands"] and seen["engaged"]
-                      and not seen["refused"] and seen["tool_travel_mm"] > args.min_travel_mm
-                      and seen["motion_states_publishers"]
-                      and set(seen["motion_states_publishers"].values()) == {args.sensor_ip})
+        seen.update(
+            accepted=len(watch.latencies),
+            refused=sorted(set(watch.refused)),
+            engaged=bool(ENGAGED & set(watch.statuses)),
+            latency_p50_ms=round(float(np.median(watch.latencies)) * 1000, 3) if watch.latencies else None,
+            tool_travel_mm=round(float(np.ptp(tools, axis=0).max()) * 1000, 1) if len(tools) else 0.0,
+        )
+    seen["ok"] = bool(
+        seen["ready"]
+        and seen["motion_states_arrived"]
+        and seen["enough_commands"]
+        and seen["engaged"]
+        and not seen["refused"]
+        and seen["tool_travel_mm"] > args.min_travel_mm
+        and seen["motion_states_publishers"]
+        and set(seen["motion_states_publishers"].values()) == {args.sensor_ip}
+    )
     return seen
 
 

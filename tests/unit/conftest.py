@@ -1,5 +1,6 @@
 """Shared fixtures of the pure-Python suite (no roscore needed), for every folder below, and
 the paths its test modules import (``from ..conftest import DATA``)."""
+
 import os
 import sys
 
@@ -9,8 +10,15 @@ import pytest
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 # The pure-Python packages import straight from the source tree, so the unit tests need
 # neither a built workspace nor ROS environment variables.
-for package in ("motion_common", "motion_sensor", "motion_commander", "hw_interface", "motion_apps", "kitting",
-                "dashboard"):
+for package in (
+    "motion_common",
+    "motion_sensor",
+    "motion_commander",
+    "hw_interface",
+    "motion_apps",
+    "kitting",
+    "dashboard",
+):
     path = os.path.join(ROOT, "src", package)
     if path not in sys.path:
         sys.path.insert(0, path)

@@ -9,17 +9,29 @@
   its name resolve to 127.0.0.1 (DNS rebinding) can therefore neither read the page nor
   press a control on it.
 """
+
 import hmac
 import math
 import os
 import string
-from typing import Iterable, Optional
+from collections.abc import Iterable
 from urllib.parse import urlsplit
 
 from motion_common.errors import ParameterError
 
-__all__ = ["LOCAL_HOSTS", "MIN_TOKEN_BITS", "TOKEN_ENV", "check_access_config", "token_accepted", "token_strength",
-           "load_token", "allowed_hosts", "host_allowed", "origin_allowed", "HostOriginGuard"]
+__all__ = [
+    "LOCAL_HOSTS",
+    "MIN_TOKEN_BITS",
+    "TOKEN_ENV",
+    "check_access_config",
+    "token_accepted",
+    "token_strength",
+    "load_token",
+    "allowed_hosts",
+    "host_allowed",
+    "origin_allowed",
+    "HostOriginGuard",
+]
 
 LOCAL_HOSTS = frozenset({"127.0.0.1", "localhost", "::1"})
 MIN_TOKEN_BITS = 64
@@ -55,8 +67,9 @@ def load_token(param_token: str, token_file: str, environ=None) -> str:
         except OSError as exc:
             raise ParameterError(f"dashboard_token_file {path}: cannot read: {exc.strerror or exc}") from None
         if mode & 0o077:
-            raise ParameterError(f"dashboard_token_file {path} is readable by others (mode {mode & 0o777:o}); "
-                                 f"chmod 600 {path}")
+            raise ParameterError(
+                f"dashboard_token_file {path} is readable by others (mode {mode & 0o777:o}); chmod 600 {path}"
+            )
         if not token:
             raise ParameterError(f"dashboard_token_file {path} is empty")
         return token
@@ -67,13 +80,17 @@ def check_access_config(host: str, token: str) -> None:
     """Refuse to serve beyond this machine without a strong enough token (ParameterError
     saying what to do)."""
     if token and token_strength(token) < MIN_TOKEN_BITS:
-        raise ParameterError(f"the dashboard token is too weak ({token_strength(token):.0f} bits, at least "
-                             f"{MIN_TOKEN_BITS} needed: 16 random hex digits or more); {_TOKEN_HINT}")
+        raise ParameterError(
+            f"the dashboard token is too weak ({token_strength(token):.0f} bits, at least "
+            f"{MIN_TOKEN_BITS} needed: 16 random hex digits or more); {_TOKEN_HINT}"
+        )
     if host not in LOCAL_HOSTS and not token:
-        raise ParameterError(f"dashboard_host:={host} opens the dashboard (and its robot controls) to the network: "
-                             f"also give an access token ({_TOKEN_HINT}, or the environment variable {TOKEN_ENV}), "
-                             "and open http://<this machine>:<port>/?token=<token>; or keep the default "
-                             "dashboard_host:=127.0.0.1")
+        raise ParameterError(
+            f"dashboard_host:={host} opens the dashboard (and its robot controls) to the network: "
+            f"also give an access token ({_TOKEN_HINT}, or the environment variable {TOKEN_ENV}), "
+            "and open http://<this machine>:<port>/?token=<token>; or keep the default "
+            "dashboard_host:=127.0.0.1"
+        )
 
 
 def token_accepted(expected: str, given: str) -> bool:
@@ -92,7 +109,7 @@ def allowed_hosts(host: str) -> frozenset:
     return frozenset(names)
 
 
-def _hostname(authority: str) -> Optional[str]:
+def _hostname(authority: str) -> str | None:
     """The host part of a Host header value or a URL's authority, lower case, without the
     port or IPv6 brackets; None when it cannot be parsed."""
     try:
@@ -104,7 +121,7 @@ def _hostname(authority: str) -> Optional[str]:
     return name.lower() if name else None
 
 
-def host_allowed(header: Optional[str], allowed: Iterable[str], extra: Iterable[str] = ()) -> bool:
+def host_allowed(header: str | None, allowed: Iterable[str], extra: Iterable[str] = ()) -> bool:
     """Whether a request's Host header names this server (``extra``: more names, e.g. the
     machine's own name when serving the network)."""
     if not header:
@@ -113,7 +130,7 @@ def host_allowed(header: Optional[str], allowed: Iterable[str], extra: Iterable[
     return name is not None and (name in allowed or name in {e.lower() for e in extra})
 
 
-def origin_allowed(origin: Optional[str], allowed: Iterable[str], extra: Iterable[str] = ()) -> bool:
+def origin_allowed(origin: str | None, allowed: Iterable[str], extra: Iterable[str] = ()) -> bool:
     """Whether a request's Origin header is this server's own page (no Origin: not a
     browser page, allowed; the Host check still applies)."""
     if origin is None:
@@ -138,7 +155,7 @@ class HostOriginGuard:
         self.extra = tuple(extra_hosts)
         self.refused = 0
 
-    def reason(self, scope) -> Optional[str]:
+    def reason(self, scope) -> str | None:
         """Why the request is refused, or None."""
         headers = {}
         for key, value in scope.get("headers") or []:
@@ -161,8 +178,15 @@ class HostOriginGuard:
             await receive()  # the websocket.connect message
             await send({"type": "websocket.close", "code": 1008, "reason": why[:120]})
             return None
-        await send({"type": "http.response.start", "status": 403,
-                    "headers": [(b"content-type", b"text/plain; charset=utf-8"),
-                                (b"content-length", str(len(body)).encode())]})
+        await send(
+            {
+                "type": "http.response.start",
+                "status": 403,
+                "headers": [
+                    (b"content-type", b"text/plain; charset=utf-8"),
+                    (b"content-length", str(len(body)).encode()),
+                ],
+            }
+        )
         await send({"type": "http.response.body", "body": body})
         return None

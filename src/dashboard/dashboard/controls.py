@@ -3,8 +3,8 @@
 A control that cannot act is disabled and its reason is shown next to it (refusing a
 replay while teleop is engaged is one such rule). STOP is never disabled.
 """
+
 from dataclasses import dataclass
-from typing import Dict, Optional
 
 from .status_style import is_engaged
 
@@ -28,8 +28,12 @@ def _first(*rules) -> ControlState:
     return ON
 
 
-def control_states(values: Dict[str, object], program_job: bool = False, campaign_job: bool = False,
-                   selected_program: Optional[str] = None) -> Dict[str, ControlState]:
+def control_states(
+    values: dict[str, object],
+    program_job: bool = False,
+    campaign_job: bool = False,
+    selected_program: str | None = None,
+) -> dict[str, ControlState]:
     """Enabled/reason of every control from a state snapshot's values and the running jobs.
 
     Keys read: status (TeleopStatus code), engage_mode, stop_latched, server_up,
@@ -42,36 +46,49 @@ def control_states(values: Dict[str, object], program_job: bool = False, campaig
     server_up = bool(values.get("server_up"))
     button_mode = values.get("engage_mode") == "button"
     mode = values.get("engage_mode") or "unknown"
-    not_button = (f"engage mode is '{mode}': the hand works the clutch "
-                  "(start the session with engage:=button to engage from here)")
+    not_button = (
+        f"engage mode is '{mode}': the hand works the clutch "
+        "(start the session with engage:=button to engage from here)"
+    )
     no_program = selected_program is None
     busy = "a program run is in progress (wait for it or press STOP)"
     return {
         "stop": ON,
         "release": _first((not latched, "the stop is not latched")),
-        "engage": _first((not core_up, "motion_commander is not running (no /motion_commander/status)"),
-                         (not button_mode, not_button),
-                         (latched, "the stop is latched: Release first"),
-                         (status == 0, "no robot state yet (waiting for /joint_states)"),
-                         (engaged, "already engaged")),
-        "disengage": _first((not core_up, "motion_commander is not running (no /motion_commander/status)"),
-                            (not button_mode, not_button),
-                            (not engaged, "not engaged")),
-        "speed_ratio": _first((values.get("speed_ratio") is None,
-                               "motion_commander is not running (no /motion_commander/speed_ratio)")),
+        "engage": _first(
+            (not core_up, "motion_commander is not running (no /motion_commander/status)"),
+            (not button_mode, not_button),
+            (latched, "the stop is latched: Release first"),
+            (status == 0, "no robot state yet (waiting for /joint_states)"),
+            (engaged, "already engaged"),
+        ),
+        "disengage": _first(
+            (not core_up, "motion_commander is not running (no /motion_commander/status)"),
+            (not button_mode, not_button),
+            (not engaged, "not engaged"),
+        ),
+        "speed_ratio": _first(
+            (values.get("speed_ratio") is None, "motion_commander is not running (no /motion_commander/speed_ratio)")
+        ),
         "filter": _first((values.get("filter") is None, "no sequencer (no /motion_sensor/filter)")),
         "dry_run": _first((no_program, "select a program"), (program_job, busy)),
-        "replay": _first((no_program, "select a program"),
-                         (program_job, busy),
-                         (not server_up, "no robot server (/motion_controller/latch_stop not available)"),
-                         (latched, "the stop is latched: Release first"),
-                         (engaged, "teleop is engaged: take the hand away (or disengage) first"),
-                         (campaign_job, "a kitting campaign is running")),
+        "replay": _first(
+            (no_program, "select a program"),
+            (program_job, busy),
+            (not server_up, "no robot server (/motion_controller/latch_stop not available)"),
+            (latched, "the stop is latched: Release first"),
+            (engaged, "teleop is engaged: take the hand away (or disengage) first"),
+            (campaign_job, "a kitting campaign is running"),
+        ),
         "delete": _first((no_program, "select a program"), (program_job, busy)),
-        "campaign_start": _first((not values.get("kitting_cell"),
-                                  "no simulated kitting cell (/kitting_cell_sim/spawn): run launch/kitting_sim.launch"),
-                                 (campaign_job, "a campaign is running"),
-                                 (latched, "the stop is latched: Release first"),
-                                 (program_job, "a program run is in progress")),
+        "campaign_start": _first(
+            (
+                not values.get("kitting_cell"),
+                "no simulated kitting cell (/kitting_cell_sim/spawn): run launch/kitting_sim.launch",
+            ),
+            (campaign_job, "a campaign is running"),
+            (latched, "the stop is latched: Release first"),
+            (program_job, "a program run is in progress"),
+        ),
         "campaign_end": _first((not campaign_job, "no campaign is running")),
     }

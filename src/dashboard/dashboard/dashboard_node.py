@@ -5,6 +5,7 @@ rospy is initialised with disable_signals=True: uvicorn owns SIGINT (roslaunch's
 stops serving, and then this node shuts rospy down and ends its child jobs. A rospy
 shutdown from elsewhere (rosnode kill) stops the web server in turn.
 """
+
 import json
 import os
 import threading
@@ -12,17 +13,13 @@ import threading
 import numpy as np
 import rospy
 import rosservice
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import PoseStamped
-from sensor_msgs.msg import JointState
-from std_msgs.msg import Bool, Float64, String, UInt8
-from std_srvs.srv import SetBool
+from std_msgs.msg import Bool, Float64, String
 
+from dashboard.interfaces import DASHBOARD
 from motion_commander.config import TELEOP_PARAMETERS
-from motion_commander.msg import StageLatency
 from motion_common.errors import ParameterError
+from motion_common.ros_interface import publisher, service_proxy, subscriber
 from motion_common.ros_params import load_private_params
-from motion_sensor.msg import Gesture, hand
 
 from . import programs as program_files
 from .access import check_access_config, load_token
@@ -30,8 +27,6 @@ from .config import DASHBOARD_PARAMETERS
 from .jobs import Job, campaign_command, run_program_command
 from .readings import driver_status, sequencer_counters, tool_reading
 from .state import DashboardState
-from motion_common.ros_interface import publisher, service_proxy, subscriber
-from dashboard.interfaces import DASHBOARD
 
 LATCH_SERVICE = "motion_controller/latch_stop"
 SPAWN_SERVICE = "kitting_cell_sim/spawn"
@@ -42,8 +37,11 @@ class DashboardNode:
 
     def __init__(self, params):
         self.params = params
-        self.state = DashboardState(path_points=params["path_points"], path_interval_s=params["path_interval_s"],
-                                    latency_window=params["latency_window"])
+        self.state = DashboardState(
+            path_points=params["path_points"],
+            path_interval_s=params["path_interval_s"],
+            latency_window=params["latency_window"],
+        )
         self.jobs_lock = threading.Lock()
         self._jobs = {"program": None, "campaign": None}
         self.fallback_estop = False
@@ -56,6 +54,7 @@ class DashboardNode:
         self.campaign_stop_pub = publisher(DASHBOARD, "kitting_trials/stop", queue_size=1)
         self.latch = service_proxy(DASHBOARD, LATCH_SERVICE)
         s = self.state
+
         def subscribe(name, callback, **kwargs):
             return subscriber(DASHBOARD, name, callback, **kwargs)
 
@@ -237,6 +236,7 @@ def machine_names(host: str) -> list:
     if host not in ("0.0.0.0", "::"):
         return []
     import socket
+
     names = {socket.gethostname(), socket.getfqdn()}
     try:
         names |= {info[4][0] for info in socket.getaddrinfo(socket.gethostname(), None)}
@@ -264,12 +264,19 @@ def main():
         raise SystemExit(1) from None
     node = DashboardNode(params)
     from nicegui import app
+
     from .page import serve
+
     rospy.on_shutdown(app.shutdown)
     url = f"http://{params['host']}:{params['port']}/" + ("?token=<token>" if params["token"] else "")
     try:
-        serve(node.state, node, params, on_started=lambda: rospy.loginfo("dashboard: serving %s", url),
-              extra_hosts=params["allowed_hosts"] + machine_names(params["host"]))
+        serve(
+            node.state,
+            node,
+            params,
+            on_started=lambda: rospy.loginfo("dashboard: serving %s", url),
+            extra_hosts=params["allowed_hosts"] + machine_names(params["host"]),
+        )
     except KeyboardInterrupt:
         pass  # uvicorn re-raises the SIGINT it handled (roslaunch's shutdown): a normal end
     finally:

@@ -2,6 +2,7 @@
 parameters (config.DASHBOARD_PARAMETERS) and the topics and services it uses, all with
 relative names. No ROS import.
 """
+
 from motion_common.interface import NodeInterface, Service, Topic
 
 from .config import DASHBOARD_PARAMETERS
@@ -14,7 +15,8 @@ def _in(name, type_name, doc):
 
 
 DASHBOARD = NodeInterface(
-    "dashboard", "dashboard",
+    "dashboard",
+    "dashboard",
     "The operator's web page (NiceGUI): live readings of the session and its controls (engage, e-stop and "
     "release, speed ratio, filter, programs, kitting campaigns).",
     DASHBOARD_PARAMETERS,

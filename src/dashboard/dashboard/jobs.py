@@ -1,27 +1,30 @@
 """Commands the dashboard runs for the operator (a program replay or dry run, a kitting
 campaign) as child processes: their output is kept for the page, and they are ended with
 SIGINT like roslaunch ends a node."""
+
 import os
 import signal
 import subprocess
 import threading
 from collections import deque
-from typing import Callable, List, Optional, Sequence
+from collections.abc import Callable, Sequence
 
 
 class Job:
     """One child process; ``lines`` holds the last ``keep_lines`` lines of its output."""
 
-    def __init__(self, name: str, command: Sequence[str], keep_lines: int = 200,
-                 on_exit: Optional[Callable[["Job"], None]] = None):
+    def __init__(
+        self, name: str, command: Sequence[str], keep_lines: int = 200, on_exit: Callable[["Job"], None] | None = None
+    ):
         self.name = name
         self.command = list(command)
         self._lines = deque(maxlen=keep_lines)
         self._lock = threading.Lock()
         self._on_exit = on_exit
         # Its own process group, so an end reaches what it started too (rosrun's child).
-        self.process = subprocess.Popen(self.command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                        bufsize=1, start_new_session=True)
+        self.process = subprocess.Popen(
+            self.command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1, start_new_session=True
+        )
         self._reader = threading.Thread(target=self._read, name=f"job-{name}", daemon=True)
         self._reader.start()
 
@@ -39,16 +42,16 @@ class Job:
         return self.process.poll() is None
 
     @property
-    def exit_code(self) -> Optional[int]:
+    def exit_code(self) -> int | None:
         """The exit code, or None while it runs."""
         return self.process.poll()
 
-    def lines(self) -> List[str]:
+    def lines(self) -> list[str]:
         """The output kept so far."""
         with self._lock:
             return list(self._lines)
 
-    def stop(self, timeout: float = 10.0) -> Optional[int]:
+    def stop(self, timeout: float = 10.0) -> int | None:
         """SIGINT the process group, then SIGKILL if it has not exited within ``timeout``."""
         if self.running:
             try:
@@ -62,14 +65,14 @@ class Job:
         self._reader.join(timeout)
         return self.process.poll()
 
-    def wait(self, timeout: Optional[float] = None) -> Optional[int]:
+    def wait(self, timeout: float | None = None) -> int | None:
         """Wait for the exit and for its output to be read; the exit code."""
         self.process.wait(timeout)
         self._reader.join(timeout)
         return self.process.poll()
 
 
-def run_program_command(path: str, dry_run: bool, scene: str = "") -> List[str]:
+def run_program_command(path: str, dry_run: bool, scene: str = "") -> list[str]:
     """motion_apps' run_program on a program file (checked first; --dry-run moves nothing)."""
     command = ["rosrun", "motion_apps", "run_program", path]
     if dry_run:
@@ -79,9 +82,17 @@ def run_program_command(path: str, dry_run: bool, scene: str = "") -> List[str]:
     return command
 
 
-def campaign_command(trials: int, seed: int, perturb: bool, output_dir: str) -> List[str]:
+def campaign_command(trials: int, seed: int, perturb: bool, output_dir: str) -> list[str]:
     """kitting's kitting_trials feeding the simulated cell (it reports when done or ended)."""
     if trials < 1:
         raise ValueError(f"a campaign needs at least 1 trial, got {trials}")
-    return ["rosrun", "kitting", "kitting_trials", "__name:=dashboard_campaign", f"_trials:={int(trials)}",
-            f"_seed:={int(seed)}", f"_perturb:={'true' if perturb else 'false'}", f"_output_dir:={output_dir}"]
+    return [
+        "rosrun",
+        "kitting",
+        "kitting_trials",
+        "__name:=dashboard_campaign",
+        f"_trials:={int(trials)}",
+        f"_seed:={int(seed)}",
+        f"_perturb:={'true' if perturb else 'false'}",
+        f"_output_dir:={output_dir}",
+    ]

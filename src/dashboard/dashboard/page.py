@@ -2,8 +2,9 @@
 by a timer; controls call the node's actions off the event loop (run.io_bound), so a slow
 service never freezes the page. Elements carry data-testid attributes for the browser test.
 """
+
 import time
-from typing import Callable, Dict
+from collections.abc import Callable
 
 from nicegui import app, run, ui
 
@@ -14,7 +15,7 @@ from .controls import control_states
 from .status_style import status_view
 
 COLOURS = {"grey": "#9e9e9e", "green": "#2e7d32", "amber": "#f9a825", "orange": "#ef6c00", "red": "#c62828"}
-FILTERS = list(FILTER_REGISTRY)   # the sequencer's filters, in its order
+FILTERS = list(FILTER_REGISTRY)  # the sequencer's filters, in its order
 REASON_GROUPS = (("engage", "disengage"), ("dry_run", "replay", "delete"), ("campaign_start", "campaign_end"))
 
 
@@ -32,7 +33,7 @@ def _tid(element, name: str):
 class DashboardPage:
     """The widgets of one browser tab and their refresh."""
 
-    def __init__(self, state, actions, params: Dict):
+    def __init__(self, state, actions, params: dict):
         self.state = state
         self.actions = actions
         self.params = params
@@ -49,16 +50,23 @@ class DashboardPage:
         ui.button.default_props("no-caps")  # labels as written: "Release", and STOP in capitals by itself
         with ui.header().classes("items-center bg-blue-grey-9 q-py-sm"):
             ui.label(self.params["title"]).classes("text-h6")
-            self.status_badge = _tid(ui.label("NO STATUS"), "teleop-status").classes(
-                "text-h5 text-white q-px-md q-py-xs rounded-borders").style("background-color:#9e9e9e")
+            self.status_badge = (
+                _tid(ui.label("NO STATUS"), "teleop-status")
+                .classes("text-h5 text-white q-px-md q-py-xs rounded-borders")
+                .style("background-color:#9e9e9e")
+            )
             ui.space()
             self.latched_label = _tid(ui.label(""), "latched").classes("text-subtitle1 text-red-3")
             self.buttons["release"] = _tid(ui.button("Release", on_click=self.on_release), "release").props(
-                "color=white text-color=black")
+                "color=white text-color=black"
+            )
             self.reasons["release"] = ui.label("").classes("text-caption text-grey-4")
             # The one control whose label contains STOP: large, red, in the always-visible header.
-            self.buttons["stop"] = _tid(ui.button("STOP", on_click=self.on_stop), "stop").props(
-                "color=red-10 size=xl unelevated").classes("text-h4 q-px-xl")
+            self.buttons["stop"] = (
+                _tid(ui.button("STOP", on_click=self.on_stop), "stop")
+                .props("color=red-10 size=xl unelevated")
+                .classes("text-h4 q-px-xl")
+            )
         with ui.row().classes("w-full q-pa-sm items-stretch"):
             self._input_card()
             self._teleop_card()
@@ -68,8 +76,10 @@ class DashboardPage:
             self._plot_card()
             self._programs_card()
             self._kitting_card()
-        ui.label("The STOP button is a software stop through the robot server, not a safety-rated emergency stop: "
-                 "keep the robot's own e-stop within reach.").classes("q-pa-sm text-caption text-grey-8")
+        ui.label(
+            "The STOP button is a software stop through the robot server, not a safety-rated emergency stop: "
+            "keep the robot's own e-stop within reach."
+        ).classes("q-pa-sm text-caption text-grey-8")
         ui.timer(self.params["refresh_s"], self.refresh)
 
     def _row(self, key: str, testid: str):
@@ -97,18 +107,21 @@ class DashboardPage:
             self.ratio_label = self._row("speed ratio", "speed-ratio")
             with ui.row():
                 self.buttons["engage"] = _tid(ui.button("Engage", on_click=lambda: self.on_engage(True)), "engage")
-                self.buttons["disengage"] = _tid(ui.button("Disengage", on_click=lambda: self.on_engage(False)),
-                                                 "disengage")
-            self._reason("engage")   # one line for both when their reasons agree (see refresh)
+                self.buttons["disengage"] = _tid(
+                    ui.button("Disengage", on_click=lambda: self.on_engage(False)), "disengage"
+                )
+            self._reason("engage")  # one line for both when their reasons agree (see refresh)
             self._reason("disengage")
             with ui.row().classes("items-center"):
-                self.ratio_input = ui.number("new speed ratio", value=1.0, min=0.01, max=10.0, step=0.1,
-                                             format="%.2f").classes("w-32")
+                self.ratio_input = ui.number(
+                    "new speed ratio", value=1.0, min=0.01, max=10.0, step=0.1, format="%.2f"
+                ).classes("w-32")
                 self.buttons["speed_ratio"] = _tid(ui.button("Apply", on_click=self.on_ratio), "apply-ratio")
             self._reason("speed_ratio")
             with ui.row().classes("items-center"):
                 self.filter_select = _tid(ui.select(FILTERS, label="filter", value=None), "filter-select").classes(
-                    "w-32")
+                    "w-32"
+                )
                 self.buttons["filter"] = _tid(ui.button("Switch", on_click=self.on_filter), "apply-filter")
             self._reason("filter")
 
@@ -132,51 +145,73 @@ class DashboardPage:
             with ui.row().classes("items-center"):
                 ui.label("Hand vs tool path (top view, mm)").classes("text-subtitle1 text-weight-bold")
                 ui.button("Clear", on_click=self.state.clear_paths).props("flat dense")
-            self.chart = _tid(ui.echart({
-                "animation": False,
-                "legend": {"data": ["hand (mapped)", "tool"]},
-                "xAxis": {"type": "value", "name": "x", "scale": True},
-                "yAxis": {"type": "value", "name": "y", "scale": True},
-                "series": [{"name": "hand (mapped)", "type": "line", "showSymbol": False, "data": []},
-                           {"name": "tool", "type": "line", "showSymbol": False, "data": []}],
-            }), "path-plot").classes("w-full h-64")
+            self.chart = _tid(
+                ui.echart(
+                    {
+                        "animation": False,
+                        "legend": {"data": ["hand (mapped)", "tool"]},
+                        "xAxis": {"type": "value", "name": "x", "scale": True},
+                        "yAxis": {"type": "value", "name": "y", "scale": True},
+                        "series": [
+                            {"name": "hand (mapped)", "type": "line", "showSymbol": False, "data": []},
+                            {"name": "tool", "type": "line", "showSymbol": False, "data": []},
+                        ],
+                    }
+                ),
+                "path-plot",
+            ).classes("w-full h-64")
 
     def _programs_card(self):
         with ui.card().classes("dash-card"):
             with ui.row().classes("items-center"):
                 ui.label("Teach programs").classes("text-subtitle1 text-weight-bold")
                 ui.button("Refresh", on_click=self.refresh_programs).props("flat dense")
-            self.program_select = _tid(ui.select({}, label="program", on_change=self.on_program_selected),
-                                       "program-select").classes("w-64")
+            self.program_select = _tid(
+                ui.select({}, label="program", on_change=self.on_program_selected), "program-select"
+            ).classes("w-64")
             with ui.row():
                 self.buttons["dry_run"] = _tid(ui.button("Dry run", on_click=lambda: self.on_run(True)), "dry-run")
                 self.buttons["replay"] = _tid(ui.button("Replay", on_click=lambda: self.on_run(False)), "replay")
-                self.buttons["delete"] = _tid(ui.button("Delete", on_click=self.on_delete).props("color=grey-8"),
-                                              "delete")
+                self.buttons["delete"] = _tid(
+                    ui.button("Delete", on_click=self.on_delete).props("color=grey-8"), "delete"
+                )
             for name in ("dry_run", "replay", "delete"):
                 self._reason(name)
-            self.program_log = _tid(ui.label(""), "program-log").classes(
-                "text-caption whitespace-pre font-mono").style("max-height: 12em; overflow-y: auto")
+            self.program_log = (
+                _tid(ui.label(""), "program-log")
+                .classes("text-caption whitespace-pre font-mono")
+                .style("max-height: 12em; overflow-y: auto")
+            )
 
     def _kitting_card(self):
         with ui.card().classes("dash-card"):
             ui.label("Kitting campaign").classes("text-subtitle1 text-weight-bold")
             with ui.row().classes("items-center"):
-                self.trials_input = ui.number("trials", value=self.params["campaign_trials"], min=1, max=1000,
-                                              step=1, format="%d").classes("w-24")
+                self.trials_input = ui.number(
+                    "trials", value=self.params["campaign_trials"], min=1, max=1000, step=1, format="%d"
+                ).classes("w-24")
                 self.perturb_box = ui.checkbox("perturb")
             with ui.row():
-                self.buttons["campaign_start"] = _tid(ui.button("Start campaign", on_click=self.on_campaign_start),
-                                                      "campaign-start")
-                self.buttons["campaign_end"] = _tid(ui.button("End campaign", on_click=self.on_campaign_end),
-                                                    "campaign-end")
+                self.buttons["campaign_start"] = _tid(
+                    ui.button("Start campaign", on_click=self.on_campaign_start), "campaign-start"
+                )
+                self.buttons["campaign_end"] = _tid(
+                    ui.button("End campaign", on_click=self.on_campaign_end), "campaign-end"
+                )
             self._reason("campaign_start")
             self._reason("campaign_end")
             self.campaign_label = _tid(ui.label("-"), "campaign").classes("text-body2")
-            self.class_table = _tid(ui.table(columns=[
-                {"name": c, "label": c, "field": c} for c in
-                ("class", "trials", "detected", "classified", "picked", "placed", "pose p95 mm")],
-                rows=[], row_key="class").props("dense flat"), "class-table")
+            self.class_table = _tid(
+                ui.table(
+                    columns=[
+                        {"name": c, "label": c, "field": c}
+                        for c in ("class", "trials", "detected", "classified", "picked", "placed", "pose p95 mm")
+                    ],
+                    rows=[],
+                    row_key="class",
+                ).props("dense flat"),
+                "class-table",
+            )
 
     # -- refresh -------------------------------------------------------------------------
     def refresh(self) -> None:
@@ -195,26 +230,33 @@ class DashboardPage:
         self.device_label.set_text(values.get("device") or "-")
         self.filter_label.set_text(values.get("filter") or "-")
         hands = values.get("hands")
-        self.hands_label.set_text("-" if hands is None else
-                                  f"{hands['num']} {', '.join(hands['types'])}" + ("" if fresh("hands") else " (stale)"))
+        self.hands_label.set_text(
+            "-"
+            if hands is None
+            else f"{hands['num']} {', '.join(hands['types'])}" + ("" if fresh("hands") else " (stale)")
+        )
         gesture = values.get("gesture")
-        self.gesture_label.set_text("-" if gesture is None else
-                                    f"{gesture['name']} ({gesture['confidence']:.2f}), {ages['gesture']:.0f} s ago")
+        self.gesture_label.set_text(
+            "-" if gesture is None else f"{gesture['name']} ({gesture['confidence']:.2f}), {ages['gesture']:.0f} s ago"
+        )
         self.teach_label.set_text(values.get("teach_feedback") or "-")
         self.mode_label.set_text(values.get("engage_mode") or "-")
         latency = snap["latency_ms"]
-        self.latency_label.set_text("-" if latency is None else
-                                    f"{latency[0]:.2f} / {latency[1]:.2f} ms ({latency[2]} commands)")
+        self.latency_label.set_text(
+            "-" if latency is None else f"{latency[0]:.2f} / {latency[1]:.2f} ms ({latency[2]} commands)"
+        )
         self.ratio_label.set_text(_fmt(values.get("speed_ratio"), 2))
         driver = values.get("driver")
         if driver is None:
             self.driver_label.set_text("-")
             self.fault_label.set_text("-")
         else:
-            self.driver_label.set_text(("connected" if driver["connected"] else "NOT connected") +
-                                       ("" if fresh("driver") else " (stale)"))
-            self.fault_label.set_text(f"{driver['fault'] or 'no fault'} / "
-                                      f"{'PROTECTIVE STOP' if driver['protective_stop'] else 'no'}")
+            self.driver_label.set_text(
+                ("connected" if driver["connected"] else "NOT connected") + ("" if fresh("driver") else " (stale)")
+            )
+            self.fault_label.set_text(
+                f"{driver['fault'] or 'no fault'} / {'PROTECTIVE STOP' if driver['protective_stop'] else 'no'}"
+            )
         joints = values.get("joints")
         self.joints_label.set_text("-" if joints is None else " ".join(f"{j:.1f}" for j in joints))
         tool = values.get("tool")
@@ -228,13 +270,14 @@ class DashboardPage:
         self._refresh_plot(snap["paths"])
         self._refresh_jobs(values)
         jobs = self.actions.jobs()
-        states = control_states(values, program_job=jobs["program"], campaign_job=jobs["campaign"],
-                                selected_program=self.selected_program)
+        states = control_states(
+            values, program_job=jobs["program"], campaign_job=jobs["campaign"], selected_program=self.selected_program
+        )
         for key, button in self.buttons.items():
             button.set_enabled(states[key].enabled)
             if key in self.reasons:
                 self.reasons[key].set_text(states[key].reason)
-        for group in REASON_GROUPS:   # a reason shared by neighbouring buttons is shown once
+        for group in REASON_GROUPS:  # a reason shared by neighbouring buttons is shown once
             shown = []
             for key in group:
                 if states[key].reason in shown:
@@ -265,13 +308,21 @@ class DashboardPage:
         status = campaign_lines[-1] if campaign_lines else "-"
         if values.get("campaign_result"):
             result = values["campaign_result"]
-            status = (f"done: {result.get('successes', '?')}/{result.get('trials', '?')} placed"
-                      if "error" not in result else f"error: {result['error']}")
+            status = (
+                f"done: {result.get('successes', '?')}/{result.get('trials', '?')} placed"
+                if "error" not in result
+                else f"error: {result['error']}"
+            )
         self.campaign_label.set_text(status)
         if progress and "per_class" in progress:
-            rows = [{"class": name, **{k: row[k] for k in ("trials", "detected", "classified", "picked", "placed")},
-                     "pose p95 mm": _fmt(row.get("pose_error_mm_p95"), 2)}
-                    for name, row in progress["per_class"].items()]
+            rows = [
+                {
+                    "class": name,
+                    **{k: row[k] for k in ("trials", "detected", "classified", "picked", "placed")},
+                    "pose p95 mm": _fmt(row.get("pose_error_mm_p95"), 2),
+                }
+                for name, row in progress["per_class"].items()
+            ]
             if rows != self.class_table.rows:
                 self.class_table.rows = rows
                 self.class_table.update()
@@ -282,8 +333,9 @@ class DashboardPage:
         for info in self.actions.programs():
             detail = f"{info.waypoints} waypoints, {info.robot}" if not info.error else "unreadable"
             options[info.name] = f"{info.name} ({detail})"
-        self.program_select.set_options(options, value=self.selected_program if self.selected_program in options
-                                        else None)
+        self.program_select.set_options(
+            options, value=self.selected_program if self.selected_program in options else None
+        )
 
     # -- actions -------------------------------------------------------------------------
     async def on_stop(self):
@@ -325,14 +377,17 @@ class DashboardPage:
             self.refresh_programs()
 
     async def on_campaign_start(self):
-        ui.notify(await run.io_bound(self.actions.start_campaign, int(self.trials_input.value or 1),
-                                     bool(self.perturb_box.value)))
+        ui.notify(
+            await run.io_bound(
+                self.actions.start_campaign, int(self.trials_input.value or 1), bool(self.perturb_box.value)
+            )
+        )
 
     async def on_campaign_end(self):
         ui.notify(await run.io_bound(self.actions.end_campaign))
 
 
-def serve(state, actions, params: Dict, on_started: Callable[[], None] = None, extra_hosts=()) -> None:
+def serve(state, actions, params: dict, on_started: Callable[[], None] = None, extra_hosts=()) -> None:
     """Serve the page until the server is told to stop (SIGINT, or app.shutdown()). Every
     request, the page's socket.io connection included, first passes the Host/Origin guard
     (``extra_hosts``: names besides loopback and ``host`` that this server answers to)."""
@@ -349,5 +404,13 @@ def serve(state, actions, params: Dict, on_started: Callable[[], None] = None, e
 
     if on_started is not None:
         app.on_startup(on_started)
-    ui.run(host=params["host"], port=int(params["port"]), title=params["title"], show=False, reload=False,
-           show_welcome_message=False, favicon="🤖", uvicorn_logging_level="warning")
+    ui.run(
+        host=params["host"],
+        port=int(params["port"]),
+        title=params["title"],
+        show=False,
+        reload=False,
+        show_welcome_message=False,
+        favicon="🤖",
+        uvicorn_logging_level="warning",
+    )

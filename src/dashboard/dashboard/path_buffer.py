@@ -1,7 +1,7 @@
 """The hand path (mapped into the robot base frame: /motion_commander/target) and the tool
 path (/motion_controller/tool_pose), kept short and thinned for the page's plot."""
+
 from collections import deque
-from typing import Dict, List
 
 
 class PathBuffer:
@@ -30,6 +30,6 @@ class PathBuffer:
         for path in self._paths.values():
             path.clear()
 
-    def series(self) -> Dict[str, List[List[float]]]:
+    def series(self) -> dict[str, list[list[float]]]:
         """Top view for the plot: name -> [[x, y], ...] in mm, oldest first."""
         return {name: [[1000.0 * p[1], 1000.0 * p[2]] for p in path] for name, path in self._paths.items()}

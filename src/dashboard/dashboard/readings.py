@@ -1,12 +1,13 @@
 """Plain readings of ROS message contents for the page (no ROS import: the node passes
 key/value pairs and numbers)."""
+
 from collections import deque
-from typing import Dict, Iterable, Optional, Tuple
+from collections.abc import Iterable
 
 import numpy as np
 
 
-def sequencer_counters(values: Iterable[Tuple[str, str]]) -> Dict[str, object]:
+def sequencer_counters(values: Iterable[tuple[str, str]]) -> dict[str, object]:
     """Frames in/out, drops by reason and latency from the sequencer's /diagnostics values.
 
     Values that are not numbers are kept as text (e.g. active_device); unparsable numbers
@@ -16,7 +17,7 @@ def sequencer_counters(values: Iterable[Tuple[str, str]]) -> Dict[str, object]:
     for key, value in values:
         if key.startswith("dropped_") and key != "dropped_total":
             try:
-                drops[key[len("dropped_"):]] = int(value)
+                drops[key[len("dropped_") :]] = int(value)
             except ValueError:
                 continue
         elif key in ("frames_in", "frames_out", "dropped_total", "filter_switches"):
@@ -35,11 +36,11 @@ def sequencer_counters(values: Iterable[Tuple[str, str]]) -> Dict[str, object]:
     return out
 
 
-def _truth(text: str) -> Optional[bool]:
+def _truth(text: str) -> bool | None:
     return {"true": True, "false": False}.get(str(text).strip().lower())
 
 
-def driver_status(values: Iterable[Tuple[str, str]], message: str, level: int) -> Dict[str, object]:
+def driver_status(values: Iterable[tuple[str, str]], message: str, level: int) -> dict[str, object]:
     """Connected, fault, protective stop and latched stop from /motion_controller/status."""
     by_key = dict(values)
     fault = by_key.get("fault", "")
@@ -64,7 +65,7 @@ class LatencyWindow:
         if np.isfinite(seconds) and seconds >= 0.0:
             self._values.append(float(seconds))
 
-    def percentiles_ms(self) -> Optional[Tuple[float, float, int]]:
+    def percentiles_ms(self) -> tuple[float, float, int] | None:
         """(p50, p99, count) in ms, or None before the first command."""
         if not self._values:
             return None
@@ -72,7 +73,7 @@ class LatencyWindow:
         return float(p50), float(p99), len(self._values)
 
 
-def tool_reading(position, quaternion) -> Dict[str, list]:
+def tool_reading(position, quaternion) -> dict[str, list]:
     """Tool pose for the page: xyz in mm and roll/pitch/yaw (fixed x-y-z axes) in degrees
     from a quaternion (x, y, z, w)."""
     x, y, z, w = (float(v) for v in quaternion)
@@ -81,5 +82,7 @@ def tool_reading(position, quaternion) -> Dict[str, list]:
     roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
     pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
     yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    return {"xyz_mm": [1000.0 * float(v) for v in position],
-            "rpy_deg": [float(np.degrees(a)) for a in (roll, pitch, yaw)]}
+    return {
+        "xyz_mm": [1000.0 * float(v) for v in position],
+        "rpy_deg": [float(np.degrees(a)) for a in (roll, pitch, yaw)],
+    }

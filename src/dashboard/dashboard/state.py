@@ -1,9 +1,10 @@
 """The dashboard's state: ROS callbacks write it from their threads, the page reads
 snapshots from the web server's thread. One lock; a snapshot is a plain dict copy."""
+
 import copy
 import threading
 import time
-from typing import Callable, Optional
+from collections.abc import Callable
 
 from .path_buffer import PathBuffer
 from .readings import LatencyWindow
@@ -17,8 +18,13 @@ class DashboardState:
     percentiles and the plot's path series.
     """
 
-    def __init__(self, clock: Callable[[], float] = time.monotonic, path_points: int = 400,
-                 path_interval_s: float = 0.05, latency_window: int = 500):
+    def __init__(
+        self,
+        clock: Callable[[], float] = time.monotonic,
+        path_points: int = 400,
+        path_interval_s: float = 0.05,
+        latency_window: int = 500,
+    ):
         self._clock = clock
         self._lock = threading.Lock()
         self._values = {}
@@ -45,7 +51,7 @@ class DashboardState:
         with self._lock:
             return self._values.get(key, default)
 
-    def age(self, key: str) -> Optional[float]:
+    def age(self, key: str) -> float | None:
         """Seconds since ``key`` was last set, or None if never."""
         with self._lock:
             stamp = self._stamps.get(key)

@@ -1,5 +1,4 @@
 """The teleop status as the page shows it: the README status table's name and a colour."""
-from typing import Optional, Tuple
 
 from motion_commander.teleop_core import TeleopStatus
 
@@ -22,11 +21,15 @@ STATUS_COLOURS = {
 }
 
 # The clutch is closed (the hand steers the tool) in these states.
-ENGAGED_STATUSES = frozenset(STATUS_COLOURS) - {TeleopStatus.WAITING_FOR_ROBOT, TeleopStatus.DISENGAGED,
-                                               TeleopStatus.ESTOP, TeleopStatus.BAD_INPUT}
+ENGAGED_STATUSES = frozenset(STATUS_COLOURS) - {
+    TeleopStatus.WAITING_FOR_ROBOT,
+    TeleopStatus.DISENGAGED,
+    TeleopStatus.ESTOP,
+    TeleopStatus.BAD_INPUT,
+}
 
 
-def status_view(code: Optional[int]) -> Tuple[str, str]:
+def status_view(code: int | None) -> tuple[str, str]:
     """(name, colour) of a /motion_commander/status code; None means not heard yet."""
     if code is None:
         return "NO STATUS", "grey"
@@ -37,6 +40,6 @@ def status_view(code: Optional[int]) -> Tuple[str, str]:
     return status.name, STATUS_COLOURS[status]
 
 
-def is_engaged(code: Optional[int]) -> bool:
+def is_engaged(code: int | None) -> bool:
     """True when the status code means the clutch is closed."""
-    return code in ENGAGED_STATUSES   # IntEnum members hash and compare as their ints
+    return code in ENGAGED_STATUSES  # IntEnum members hash and compare as their ints

@@ -4,6 +4,7 @@ This module is the package's ROS edge for scripts (it imports rospy); the caller
 called rospy.init_node. Every method raises HwInterfaceError, carrying the commander.srv
 result code, when the server refuses or fails a command.
 """
+
 import threading
 
 import rospy
@@ -22,19 +23,33 @@ class MotionControllerClient:
         try:
             rospy.wait_for_service(service, timeout=timeout)
         except rospy.ROSException:
-            raise HwInterfaceError(f"service {service} did not appear within {timeout:.0f} s; "
-                                   "is motion_controller_server running (launch/hw_sim.launch)?",
-                                   Result.NOT_CONNECTED) from None
+            raise HwInterfaceError(
+                f"service {service} did not appear within {timeout:.0f} s; "
+                "is motion_controller_server running (launch/hw_sim.launch)?",
+                Result.NOT_CONNECTED,
+            ) from None
         self._proxy = rospy.ServiceProxy(service, commander, persistent=True)
         # One persistent connection carries one request at a time; callers on several
         # threads (subscribers, timers, service handlers) take turns.
         self._lock = threading.Lock()
 
-    def call(self, command_index: int, position=(), orientation=(), joints=(), frame_id: str = "", stamp=None,
-             check: bool = True):
+    def call(
+        self,
+        command_index: int,
+        position=(),
+        orientation=(),
+        joints=(),
+        frame_id: str = "",
+        stamp=None,
+        check: bool = True,
+    ):
         """Send one request; return the response (raise on a non-SUCCESS result if ``check``)."""
-        request = commanderRequest(command_index=int(command_index), position=list(position),
-                                   orientation=list(orientation), joints=list(joints))
+        request = commanderRequest(
+            command_index=int(command_index),
+            position=list(position),
+            orientation=list(orientation),
+            joints=list(joints),
+        )
         request.header.frame_id = frame_id
         if stamp is not None:
             request.header.stamp = stamp
@@ -51,9 +66,11 @@ class MotionControllerClient:
                     self._proxy = rospy.ServiceProxy(self.service, commander, persistent=True)
                     response = self._proxy(request)
         if check and response.result != Result.SUCCESS:
-            raise HwInterfaceError(f"{CommandIndex(command_index).name if command_index in set(CommandIndex) else command_index} "
-                                   f"refused: {Result(response.result).name}: {response.header.frame_id}",
-                                   response.result)
+            raise HwInterfaceError(
+                f"{CommandIndex(command_index).name if command_index in set(CommandIndex) else command_index} "
+                f"refused: {Result(response.result).name}: {response.header.frame_id}",
+                response.result,
+            )
         return response
 
     def close(self):

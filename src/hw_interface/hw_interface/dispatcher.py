@@ -8,11 +8,12 @@ A LATCHED STOP (``latch_stop`` / ``release_stop``) reaches every client at once:
 robot stops, a blocking move in progress answers INTERRUPTED, and every motion command
 (SET_JOINTS, MOVE_J, MOVE_L) is refused with LATCHED_STOP until it is released.
 """
+
 import math
 import threading
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Optional, Sequence
 
 import numpy as np
 
@@ -54,8 +55,10 @@ STREAM_REFERENCE_TIMEOUT = 0.25
 MOTION_COMMANDS = (CommandIndex.SET_JOINTS, CommandIndex.MOVE_J, CommandIndex.MOVE_L)
 
 #: How to release a latched stop, for refusal messages.
-RELEASE_HINT = ("release it with `rosservice call /motion_controller/latch_stop \"data: false\"` "
-                "(or publish False on /motion_commander/estop)")
+RELEASE_HINT = (
+    'release it with `rosservice call /motion_controller/latch_stop "data: false"` '
+    "(or publish False on /motion_commander/estop)"
+)
 
 
 def stop_driver(driver: RobotDriver, reason: str) -> None:
@@ -69,9 +72,17 @@ def stop_driver(driver: RobotDriver, reason: str) -> None:
 class CommandDispatcher:
     """Validates and executes commander.srv requests on one driver (thread-safe)."""
 
-    def __init__(self, driver: RobotDriver, workspace: Optional[Workspace] = None,
-                 max_stream_step: float = 0.2, user: str = "", password: str = "", move_timeout: float = 30.0,
-                 max_stream_lag: float = 0.6, clock=time.monotonic):
+    def __init__(
+        self,
+        driver: RobotDriver,
+        workspace: Workspace | None = None,
+        max_stream_step: float = 0.2,
+        user: str = "",
+        password: str = "",
+        move_timeout: float = 30.0,
+        max_stream_lag: float = 0.6,
+        clock=time.monotonic,
+    ):
         self.driver = driver
         self.workspace = workspace or Workspace()
         # Largest joint change (rad) one streamed SetJoints may ask for: teleop streams
@@ -84,7 +95,7 @@ class CommandDispatcher:
         self.max_stream_lag = float(max_stream_lag)
         self._clock = clock
         self._stream_lock = threading.Lock()  # service threads stream concurrently
-        self._stream_reference: Optional[np.ndarray] = None
+        self._stream_reference: np.ndarray | None = None
         self._stream_time = float("-inf")
         # The driver's joint limits as float lists, read once (every streamed command is
         # checked against them) and again after each LOGIN, which may load another model.
@@ -99,8 +110,8 @@ class CommandDispatcher:
         self._gate = threading.Lock()
         self._latched = False
         self._latch_source = ""
-        self._in_flight = 0          # motion commands past the latch check, not yet returned
-        self._stop_epoch = 0         # increases with every STOP / latch
+        self._in_flight = 0  # motion commands past the latch check, not yet returned
+        self._stop_epoch = 0  # increases with every STOP / latch
 
     # -- latched stop ----------------------------------------------------------------------
     @property
@@ -121,8 +132,11 @@ class CommandDispatcher:
             if not already:
                 self._latch_source = source
         self._stop(f"latched stop ({source})")
-        return (f"stop already latched (by {self._latch_source}); robot stopped again" if already
-                else f"stop latched by {source}: robot stopped, motion refused until released")
+        return (
+            f"stop already latched (by {self._latch_source}); robot stopped again"
+            if already
+            else f"stop latched by {source}: robot stopped, motion refused until released"
+        )
 
     def release_stop(self, source: str = "latch_stop") -> str:
         """Release the latched stop; motion commands are accepted again.
@@ -132,8 +146,10 @@ class CommandDispatcher:
         with self._gate:
             was, by = self._latched, self._latch_source
             if was and by != source:
-                return (f"stop NOT released: it was latched by {by}, release it there "
-                        f"(a release from {source} cannot lift it)")
+                return (
+                    f"stop NOT released: it was latched by {by}, release it there "
+                    f"(a release from {source} cannot lift it)"
+                )
             self._latched, self._latch_source = False, ""
         return f"stop released by {source}" if was else "no stop was latched"
 
@@ -178,9 +194,13 @@ class CommandDispatcher:
             if motion:
                 with self._gate:
                     if self._latched:
-                        return self._answer(Result.LATCHED_STOP, (
-                            f"{command.name} refused: a latched stop is active (set by {self._latch_source}); "
-                            + RELEASE_HINT))
+                        return self._answer(
+                            Result.LATCHED_STOP,
+                            (
+                                f"{command.name} refused: a latched stop is active (set by {self._latch_source}); "
+                                + RELEASE_HINT
+                            ),
+                        )
                     self._in_flight += 1
                     epoch = self._stop_epoch
             try:
@@ -246,16 +266,20 @@ class CommandDispatcher:
             base = current if reference is None else float_list(reference)
             step = max(abs(v - b) for v, b in zip(q, base))
             if step > self.max_stream_step:
-                return Result.TOO_FAR, (f"SET_JOINTS target is {step:.3f} rad from {against} (limit "
-                                        f"{self.max_stream_step:.3f}); use MOVE_J for large motions")
+                return Result.TOO_FAR, (
+                    f"SET_JOINTS target is {step:.3f} rad from {against} (limit "
+                    f"{self.max_stream_step:.3f}); use MOVE_J for large motions"
+                )
             lag = max(abs(v - c) for v, c in zip(q, current))
             if lag > self.max_stream_lag:
-                return Result.TOO_FAR, (f"SET_JOINTS target is {lag:.3f} rad ahead of the robot (limit "
-                                        f"{self.max_stream_lag:.3f}): the robot is not following the stream; "
-                                        "slow the stream down or check the robot")
+                return Result.TOO_FAR, (
+                    f"SET_JOINTS target is {lag:.3f} rad ahead of the robot (limit "
+                    f"{self.max_stream_lag:.3f}): the robot is not following the stream; "
+                    "slow the stream down or check the robot"
+                )
         return None
 
-    def _note_stream(self, target: Optional[np.ndarray]) -> None:
+    def _note_stream(self, target: np.ndarray | None) -> None:
         """Remember the last accepted streamed target (None: the stream was broken off)."""
         with self._stream_lock:
             self._stream_reference = target
@@ -263,8 +287,9 @@ class CommandDispatcher:
 
     def _check_pose(self, position, orientation):
         if len(position) != 3 or len(orientation) != 4:
-            return Result.WRONG_LENGTH, (f"MOVE_L needs 3 position and 4 orientation values, got "
-                                         f"{len(position)} and {len(orientation)}")
+            return Result.WRONG_LENGTH, (
+                f"MOVE_L needs 3 position and 4 orientation values, got {len(position)} and {len(orientation)}"
+            )
         p = np.asarray(position, dtype=float)
         o = np.asarray(orientation, dtype=float)
         if not (np.all(np.isfinite(p)) and np.all(np.isfinite(o))):
@@ -273,8 +298,10 @@ class CommandDispatcher:
         if abs(np.linalg.norm(o) - 1.0) > 1e-3:
             return Result.BAD_ORIENTATION, f"orientation norm is {np.linalg.norm(o):.4f}, not 1 (x, y, z, w)"
         if not self.workspace.contains(p):
-            return Result.OUT_OF_WORKSPACE, (f"position {p.round(3).tolist()} is outside the workspace box "
-                                             f"{self.workspace.lower.tolist()}..{self.workspace.upper.tolist()}")
+            return Result.OUT_OF_WORKSPACE, (
+                f"position {p.round(3).tolist()} is outside the workspace box "
+                f"{self.workspace.lower.tolist()}..{self.workspace.upper.tolist()}"
+            )
         return None
 
     # -- execution -------------------------------------------------------------------------
@@ -295,10 +322,13 @@ class CommandDispatcher:
             driver.get_robot_joints()  # raises NOT_CONNECTED when there is no controller
         elif command == CommandIndex.GET_ROBOT_CARTESIAN_POSITION:
             driver.get_robot_cartesian_position()
-        elif command in (CommandIndex.SET_JOINTS, CommandIndex.MOVE_J, CommandIndex.MOVE_L) \
-                and driver.status().protective_stop:
-            raise HwInterfaceError("the robot is in a protective stop; clear it, then command again",
-                                   Result.PROTECTIVE_STOP)
+        elif (
+            command in (CommandIndex.SET_JOINTS, CommandIndex.MOVE_J, CommandIndex.MOVE_L)
+            and driver.status().protective_stop
+        ):
+            raise HwInterfaceError(
+                "the robot is in a protective stop; clear it, then command again", Result.PROTECTIVE_STOP
+            )
         elif command == CommandIndex.SET_JOINTS:
             target = np.asarray(joints, dtype=float)
             driver.set_joints(target)
@@ -317,8 +347,11 @@ class CommandDispatcher:
                 if command == CommandIndex.MOVE_J:
                     driver.move_j(np.asarray(joints, dtype=float), timeout=self.move_timeout)
                 else:
-                    driver.move_l(np.asarray(position, dtype=float), np.asarray(orientation, dtype=float),
-                                  timeout=self.move_timeout)
+                    driver.move_l(
+                        np.asarray(position, dtype=float),
+                        np.asarray(orientation, dtype=float),
+                        timeout=self.move_timeout,
+                    )
             finally:
                 self._blocking_motion.release()
         return ()

@@ -3,6 +3,7 @@
 They mirror the constants of motion_commander/srv/commander.srv so that the pure-Python
 dispatcher needs no generated ROS code; a unit test checks the two stay identical.
 """
+
 import enum
 
 
@@ -39,5 +40,5 @@ class Result(enum.IntEnum):
     BUSY = 12
     TIMEOUT = 13
     BAD_ORIENTATION = 14
-    INTERRUPTED = 15    # a blocking move cut short: STOP, latched stop, fault, protective stop
-    LATCHED_STOP = 16   # refused: a latched stop is active until released
+    INTERRUPTED = 15  # a blocking move cut short: STOP, latched stop, fault, protective stop
+    LATCHED_STOP = 16  # refused: a latched stop is active until released

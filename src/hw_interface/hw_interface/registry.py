@@ -1,9 +1,10 @@
 """Drivers are found by name: built-ins here, plus any installed Python package that
 declares an entry point in the ``hw_interface.drivers`` group (the paper's "driver update"
 pattern: a new robot plugs in without touching this package)."""
+
+from collections.abc import Callable
 from importlib import import_module
 from importlib.metadata import entry_points
-from typing import Callable, Dict
 
 from .errors import HwInterfaceError
 
@@ -17,7 +18,7 @@ _BUILTIN = {
     # The UR driver on a simulated controller (dry runs, tests): injected, not a flag.
     "ur_rtde_fake": "hw_interface.testing.fake_rtde:fake_ur_driver",
 }
-_registered: Dict[str, Callable] = {}
+_registered: dict[str, Callable] = {}
 
 
 def register_driver(name: str, factory: Callable) -> None:

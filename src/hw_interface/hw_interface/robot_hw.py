@@ -5,10 +5,11 @@ only ever talk to this interface (as ros_control's RobotHW does for C++ controll
 Poses are (position [m], quaternion x, y, z, w) of the tool in the robot base frame;
 joints are radians in the driver's ``joint_names`` order.
 """
+
 import abc
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import List, Sequence, Tuple
 
 import numpy as np
 
@@ -22,7 +23,7 @@ class DriverStatus:
     fault: str = ""
     protective_stop: bool = False
     safety_mode: str = ""
-    gripper: str = ""          # "" released; else what holds: the gripped body (sim) or "on" (IO gripper)
+    gripper: str = ""  # "" released; else what holds: the gripped body (sim) or "on" (IO gripper)
 
 
 class RobotDriver(abc.ABC):
@@ -37,16 +38,16 @@ class RobotDriver(abc.ABC):
 
     @property
     @abc.abstractmethod
-    def joint_names(self) -> List[str]:
+    def joint_names(self) -> list[str]:
         """Joint names in command order."""
 
     @property
     @abc.abstractmethod
-    def joint_limits(self) -> Tuple[np.ndarray, np.ndarray]:
+    def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) joint limits."""
 
     @abc.abstractmethod
-    def get_robots(self) -> List[Tuple[str, int]]:
+    def get_robots(self) -> list[tuple[str, int]]:
         """GetRobots: (name, DOF) of every robot this driver can drive."""
 
     @abc.abstractmethod
@@ -62,10 +63,10 @@ class RobotDriver(abc.ABC):
         """GetRobotJoints: measured joint positions."""
 
     @abc.abstractmethod
-    def get_robot_cartesian_position(self) -> Tuple[np.ndarray, np.ndarray]:
+    def get_robot_cartesian_position(self) -> tuple[np.ndarray, np.ndarray]:
         """GetRobotCartesianPosition: measured tool pose."""
 
-    def joint_sample(self) -> Tuple[float, np.ndarray]:
+    def joint_sample(self) -> tuple[float, np.ndarray]:
         """(wall-clock time in s, measured joints) of one and the same sample: what
         /joint_states publishes, so that speeds computed from its stamps are true speeds.
         This default stamps the read; a driver that knows when its controller sampled the
@@ -112,16 +113,16 @@ class UrdfModelMixin:
     (``self.kinematics``) and a ``self.robot_name``: shared by the shipped drivers."""
 
     @property
-    def joint_names(self) -> List[str]:
+    def joint_names(self) -> list[str]:
         """Joint names in command order (the URDF's)."""
         return list(self.kinematics.joint_names)
 
     @property
-    def joint_limits(self) -> Tuple[np.ndarray, np.ndarray]:
+    def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) joint limits from the URDF."""
         return self.kinematics.lower.copy(), self.kinematics.upper.copy()
 
-    def get_robots(self) -> List[Tuple[str, int]]:
+    def get_robots(self) -> list[tuple[str, int]]:
         """GetRobots: the one robot this driver drives, with its DOF."""
         return [(self.robot_name, self.kinematics.dof)]
 

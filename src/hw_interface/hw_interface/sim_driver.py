@@ -1,9 +1,9 @@
 """pybullet simulation driver: the robot's URDF in a physics world, stepped in real time
 in its own thread, under position control (DIRECT mode by default, GUI on request)."""
+
 import os
 import threading
 import time
-from typing import Optional
 
 import numpy as np
 import pybullet
@@ -31,6 +31,7 @@ def load_scene(client, spec) -> dict:
     ``mass`` (kg, 0 = fixed) and ``color`` (rgba) for boxes.
     """
     import pybullet_data
+
     bodies = {}
     for index, entry in enumerate(spec):
         name = entry.get("name", f"body{index}")
@@ -46,8 +47,9 @@ def load_scene(client, spec) -> dict:
         elif "box" in entry:
             half = [float(v) for v in entry["box"]]
             shape = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
-            visual = client.createVisualShape(pybullet.GEOM_BOX, halfExtents=half,
-                                              rgbaColor=entry.get("color", [0.8, 0.6, 0.2, 1.0]))
+            visual = client.createVisualShape(
+                pybullet.GEOM_BOX, halfExtents=half, rgbaColor=entry.get("color", [0.8, 0.6, 0.2, 1.0])
+            )
             bodies[name] = client.createMultiBody(float(entry.get("mass", 0.1)), shape, visual, position, orientation)
         else:
             raise HwInterfaceError(f"scene body {name!r} needs 'urdf' or 'box'")
@@ -84,32 +86,76 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
 
     name = "pybullet"
 
-    PARAMETERS = ParamSchema([
-        Param("gui", False, doc="open the pybullet window (needs a display)"),
-        Param("time_step", 0.002, "s", "physics step", low=0.0001, high=0.05),
-        Param("initial_joints", None, "rad", "start pose (from motion_common/config/robots/<robot>.yaml)",
-              kind=list, nullable=True),
-        Param("speed_scale", 0.5, "1", "fraction of the URDF joint velocity limits MoveJ/MoveL use",
-              low=0.0, high=1.0, low_open=True),
-        Param("max_acceleration", 3.0, "rad/s^2", "MoveJ/MoveL joint acceleration", low=0.0, high=100.0,
-              low_open=True),
-        Param("cartesian_speed", 0.25, "m/s", "MoveL tool speed", low=0.0, high=3.0, low_open=True),
-        Param("real_time", True, doc="step in real time (false: as fast as possible)"),
-        Param("scene", [], doc="extra bodies, see hw_interface.sim_driver.load_scene", item_kind=dict),
-        Param("gripper_output", 0, "", "digital output that switches the suction gripper", low=0, high=63),
-        Param("gripper_reach", 0.02, "m", "how close a part must be to the flange to be gripped",
-              low=0.0, high=0.5),
-        Param("goal_tolerance", 0.001, "rad", "largest measured joint error for a MoveJ/MoveL SUCCESS",
-              low=0.0, high=0.1, low_open=True),
-        Param("settle_timeout", 2.0, "s", "time after the path's end allowed to come within goal_tolerance",
-              low=0.0, high=30.0, low_open=True),
-    ])
+    PARAMETERS = ParamSchema(
+        [
+            Param("gui", False, doc="open the pybullet window (needs a display)"),
+            Param("time_step", 0.002, "s", "physics step", low=0.0001, high=0.05),
+            Param(
+                "initial_joints",
+                None,
+                "rad",
+                "start pose (from motion_common/config/robots/<robot>.yaml)",
+                kind=list,
+                nullable=True,
+            ),
+            Param(
+                "speed_scale",
+                0.5,
+                "1",
+                "fraction of the URDF joint velocity limits MoveJ/MoveL use",
+                low=0.0,
+                high=1.0,
+                low_open=True,
+            ),
+            Param(
+                "max_acceleration", 3.0, "rad/s^2", "MoveJ/MoveL joint acceleration", low=0.0, high=100.0, low_open=True
+            ),
+            Param("cartesian_speed", 0.25, "m/s", "MoveL tool speed", low=0.0, high=3.0, low_open=True),
+            Param("real_time", True, doc="step in real time (false: as fast as possible)"),
+            Param("scene", [], doc="extra bodies, see hw_interface.sim_driver.load_scene", item_kind=dict),
+            Param("gripper_output", 0, "", "digital output that switches the suction gripper", low=0, high=63),
+            Param(
+                "gripper_reach", 0.02, "m", "how close a part must be to the flange to be gripped", low=0.0, high=0.5
+            ),
+            Param(
+                "goal_tolerance",
+                0.001,
+                "rad",
+                "largest measured joint error for a MoveJ/MoveL SUCCESS",
+                low=0.0,
+                high=0.1,
+                low_open=True,
+            ),
+            Param(
+                "settle_timeout",
+                2.0,
+                "s",
+                "time after the path's end allowed to come within goal_tolerance",
+                low=0.0,
+                high=30.0,
+                low_open=True,
+            ),
+        ]
+    )
 
-    def __init__(self, urdf_path: str, tool_frame: str = "tool0", gui: bool = False, time_step: float = 0.002,
-                 initial_joints=None, speed_scale: float = 0.5, max_acceleration: float = 3.0,
-                 cartesian_speed: float = 0.25, real_time: bool = True, robot_name: Optional[str] = None,
-                 scene=None, gripper_output: int = 0, gripper_reach: float = 0.02, goal_tolerance: float = 0.001,
-                 settle_timeout: float = 2.0):
+    def __init__(
+        self,
+        urdf_path: str,
+        tool_frame: str = "tool0",
+        gui: bool = False,
+        time_step: float = 0.002,
+        initial_joints=None,
+        speed_scale: float = 0.5,
+        max_acceleration: float = 3.0,
+        cartesian_speed: float = 0.25,
+        real_time: bool = True,
+        robot_name: str | None = None,
+        scene=None,
+        gripper_output: int = 0,
+        gripper_reach: float = 0.02,
+        goal_tolerance: float = 0.001,
+        settle_timeout: float = 2.0,
+    ):
         self.kinematics = RobotKinematics(urdf_path, tool_frame)
         self.urdf_path = urdf_path
         self.tool_frame = tool_frame
@@ -139,12 +185,12 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         # name -> (steps, value): readings of the state after the step numbered steps, see
         # _once_per_step; replaced by an empty dict when a reset moves the arm.
         self._step_cache = {}
-        self._path: Optional[JointPath] = None
+        self._path: JointPath | None = None
         self._path_start = 0.0
         self._path_done = threading.Event()
-        self._path_outcome = None   # None: arrived; else (Result, reason) of a cut-short move
+        self._path_outcome = None  # None: arrived; else (Result, reason) of a cut-short move
         self._sim_time = 0.0
-        self._thread: Optional[threading.Thread] = None
+        self._thread: threading.Thread | None = None
         self._running = threading.Event()
         self.steps = 0
         self.overruns = 0
@@ -154,7 +200,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self.gripper_reach = float(gripper_reach)
         self.outputs = {}
         self._grip_constraint = None
-        self.gripped_body: Optional[str] = None
+        self.gripped_body: str | None = None
 
     # -- template: connection ------------------------------------------------------------
     def login(self, url: str = "sim://", user: str = "", password: str = "") -> None:
@@ -165,8 +211,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._client = bullet_client.BulletClient(connection_mode=pybullet.GUI if self.gui else pybullet.DIRECT)
         self._client.setGravity(0, 0, -9.81)
         self._client.setTimeStep(self.time_step)
-        self._body = self._client.loadURDF(self.urdf_path, useFixedBase=True,
-                                           flags=pybullet.URDF_USE_INERTIA_FROM_FILE)
+        self._body = self._client.loadURDF(self.urdf_path, useFixedBase=True, flags=pybullet.URDF_USE_INERTIA_FROM_FILE)
         by_name = {}
         for index in range(self._client.getNumJoints(self._body)):
             info = self._client.getJointInfo(self._body, index)
@@ -177,8 +222,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         if missing or self._tool_link < 0:
             self._client.disconnect()
             self._client = None
-            raise HwInterfaceError(f"pybullet model lacks joints {missing} or tool link {self.tool_frame!r}",
-                                   Result.LOGIN_FAILED)
+            raise HwInterfaceError(
+                f"pybullet model lacks joints {missing} or tool link {self.tool_frame!r}", Result.LOGIN_FAILED
+            )
         self._joint_indices = [by_name[n] for n in self.joint_names]
         self._efforts = np.array([self._client.getJointInfo(self._body, i)[10] for i in self._joint_indices])
         # pybullet's motor constraint is soft: coupled to gravity and to the other joints'
@@ -212,8 +258,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
     # -- template: state -------------------------------------------------------------------
     def _require_connection(self):
         if self._client is None:
-            raise HwInterfaceError("the simulation is not running: call LOGIN with url 'sim://' first",
-                                   Result.NOT_CONNECTED)
+            raise HwInterfaceError(
+                "the simulation is not running: call LOGIN with url 'sim://' first", Result.NOT_CONNECTED
+            )
 
     def get_robot_joints(self) -> np.ndarray:
         return self.joint_sample()[1]
@@ -255,6 +302,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         def read():
             state = self._client.getLinkState(self._body, self._tool_link, computeForwardKinematics=True)
             return np.array(state[4]), np.array(state[5])
+
         position, orientation = self._once_per_step("tool_pose", read)
         return position.copy(), orientation.copy()
 
@@ -280,22 +328,28 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
     def move_j(self, joints, timeout: float = 30.0) -> None:
         goal = np.asarray(joints, dtype=float)
         start = self._current_command()
-        duration = joint_move_duration(start, goal, self.kinematics.velocity_limits * self.speed_scale,
-                                       self.max_acceleration)
+        duration = joint_move_duration(
+            start, goal, self.kinematics.velocity_limits * self.speed_scale, self.max_acceleration
+        )
         self._run_path(JointPath([start, goal], duration), timeout)
 
     def move_l(self, position, orientation, timeout: float = 30.0) -> None:
         line = self.kinematics.line_path(self._current_command(), position, orientation)
         if not line.reachable:
-            raise HwInterfaceError(f"MoveL target unreachable at {line.failed_at:.0%} of the line "
-                                   f"(IK error {line.ik_error * 1000:.1f} mm)", Result.UNREACHABLE)
+            raise HwInterfaceError(
+                f"MoveL target unreachable at {line.failed_at:.0%} of the line "
+                f"(IK error {line.ik_error * 1000:.1f} mm)",
+                Result.UNREACHABLE,
+            )
         waypoints, distance = line.joints, line.distance
         count = len(waypoints)
         steps = np.abs(np.diff(waypoints, axis=0)).max(axis=0) * (count - 1)
-        duration = max(joint_move_duration(np.zeros_like(steps), steps,
-                                           self.kinematics.velocity_limits * self.speed_scale,
-                                           self.max_acceleration),
-                       4.0 / 3.0 * trapezoid_duration(distance, self.cartesian_speed, self.max_acceleration))
+        duration = max(
+            joint_move_duration(
+                np.zeros_like(steps), steps, self.kinematics.velocity_limits * self.speed_scale, self.max_acceleration
+            ),
+            4.0 / 3.0 * trapezoid_duration(distance, self.cartesian_speed, self.max_acceleration),
+        )
         self._run_path(JointPath(waypoints, duration), timeout)
 
     def stop(self, reason: str = "STOP") -> None:
@@ -306,8 +360,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             self._target = np.array([s[0] for s in states])
             self._follower.reset(self._target)
             if self._path is not None:
-                self._end_path((Result.INTERRUPTED, f"motion interrupted by {reason}; the robot stopped "
-                                                    "short of the goal"))
+                self._end_path(
+                    (Result.INTERRUPTED, f"motion interrupted by {reason}; the robot stopped short of the goal")
+                )
 
     def _end_path(self, outcome) -> None:
         """Finish the running path with ``outcome`` (None: arrived); caller holds the lock."""
@@ -361,8 +416,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         body_pos, body_orn = client.getBasePositionAndOrientation(body)
         inv_pos, inv_orn = client.invertTransform(tool[4], tool[5])
         rel_pos, rel_orn = client.multiplyTransforms(inv_pos, inv_orn, body_pos, body_orn)
-        self._grip_constraint = client.createConstraint(self._body, self._tool_link, body, -1, pybullet.JOINT_FIXED,
-                                                        [0, 0, 0], rel_pos, [0, 0, 0], rel_orn)
+        self._grip_constraint = client.createConstraint(
+            self._body, self._tool_link, body, -1, pybullet.JOINT_FIXED, [0, 0, 0], rel_pos, [0, 0, 0], rel_orn
+        )
         client.changeConstraint(self._grip_constraint, maxForce=500)
         self.gripped_body = name
 
@@ -377,8 +433,10 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         """{body name: (position, quaternion)} of every scene body."""
         with self._lock:
             self._require_connection()
-            return {name: tuple(np.array(v) for v in self._client.getBasePositionAndOrientation(body))
-                    for name, body in self.bodies.items()}
+            return {
+                name: tuple(np.array(v) for v in self._client.getBasePositionAndOrientation(body))
+                for name, body in self.bodies.items()
+            }
 
     def reset_scene(self) -> None:
         """Gripper released, bodies at their scene-file poses, arm at its start joints."""
@@ -393,8 +451,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 if body is None:
                     continue
                 orientation = pybullet.getQuaternionFromEuler(entry.get("rpy", [0.0, 0.0, 0.0]))
-                self._client.resetBasePositionAndOrientation(body, entry.get("position", [0.0, 0.0, 0.0]),
-                                                             orientation)
+                self._client.resetBasePositionAndOrientation(body, entry.get("position", [0.0, 0.0, 0.0]), orientation)
                 self._client.resetBaseVelocity(body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
             for joint, value in zip(self._joint_indices, self._initial):
                 self._client.resetJointState(self._body, joint, float(value))
@@ -450,22 +507,36 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                         if error <= self.goal_tolerance:
                             self._end_path(None)
                         elif elapsed - self._path.duration > self.settle_timeout:
-                            self._target = np.array([s[0] for s in self._client.getJointStates(
-                                self._body, self._joint_indices)])
-                            self._end_path((Result.DRIVER_FAULT, (
-                                f"the arm did not settle within {self.settle_timeout:g} s of the path's end: "
-                                f"{error:.4f} rad from the goal (tolerance {self.goal_tolerance:g} rad); "
-                                "stopped there (blocked, or a joint limit/effort too low?)")))
+                            self._target = np.array(
+                                [s[0] for s in self._client.getJointStates(self._body, self._joint_indices)]
+                            )
+                            self._end_path(
+                                (
+                                    Result.DRIVER_FAULT,
+                                    (
+                                        f"the arm did not settle within {self.settle_timeout:g} s of the path's end: "
+                                        f"{error:.4f} rad from the goal (tolerance {self.goal_tolerance:g} rad); "
+                                        "stopped there (blocked, or a joint limit/effort too low?)"
+                                    ),
+                                )
+                            )
                 # One call per joint: only setJointMotorControl2 takes maxVelocity, which
                 # keeps the motor itself within the URDF limit (a servo lagging under
                 # gravity would otherwise catch up faster than the limit).
-                gain = 0.6   # pybullet positionGain, the same for every joint
+                gain = 0.6  # pybullet positionGain, the same for every joint
                 forces = (self._efforts * 4.0).tolist()
-                for joint, target, force, speed in zip(self._joint_indices, self._target.tolist(), forces,
-                                                       self._max_speeds):
-                    self._client.setJointMotorControl2(self._body, joint, pybullet.POSITION_CONTROL,
-                                                       targetPosition=target, force=force, positionGain=gain,
-                                                       maxVelocity=speed)
+                for joint, target, force, speed in zip(
+                    self._joint_indices, self._target.tolist(), forces, self._max_speeds
+                ):
+                    self._client.setJointMotorControl2(
+                        self._body,
+                        joint,
+                        pybullet.POSITION_CONTROL,
+                        targetPosition=target,
+                        force=force,
+                        positionGain=gain,
+                        maxVelocity=speed,
+                    )
                 self._client.stepSimulation()
                 self._sim_time += self.time_step
                 self.steps += 1

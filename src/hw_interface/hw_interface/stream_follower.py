@@ -9,6 +9,7 @@ physics step moves the servo setpoint toward the latest streamed target by at mo
 velocity limits times the step, scaled uniformly so the tool stays on the straight joint
 path. Moving toward a fixed goal with a capped speed never passes it, so nothing overshoots.
 """
+
 import numpy as np
 
 

@@ -1,4 +1,5 @@
 """Time parameterisation of MoveJ / MoveL paths with a trapezoidal speed profile."""
+
 import numpy as np
 
 
@@ -6,7 +7,7 @@ def trapezoid_duration(distance: float, max_velocity: float, max_acceleration: f
     """Shortest time to cover ``distance`` from rest to rest within the two limits."""
     if distance <= 0:
         return 0.0
-    ramp_distance = max_velocity ** 2 / max_acceleration
+    ramp_distance = max_velocity**2 / max_acceleration
     if distance <= ramp_distance:
         return 2.0 * np.sqrt(distance / max_acceleration)
     return distance / max_velocity + max_velocity / max_acceleration

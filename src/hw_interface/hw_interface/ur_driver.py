@@ -9,9 +9,9 @@ Safety rules, as in the Universal Robots ROS driver:
 It has been tested against a fake of the ur_rtde classes only (hw_interface.testing.fake_rtde),
 never against a controller.
 """
+
 import threading
 import time
-from typing import Optional
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -23,12 +23,22 @@ from .errors import HwInterfaceError
 from .protocol import Result
 from .robot_hw import DriverStatus, RobotDriver, UrdfModelMixin
 
-
 # UR safety modes as RTDEReceiveInterface.getSafetyMode() numbers them.
-SAFETY_MODES = {1: "normal", 2: "reduced", 3: "protective_stop", 4: "recovery", 5: "safeguard_stop",
-                6: "system_emergency_stop", 7: "robot_emergency_stop", 8: "violation", 9: "fault",
-                10: "validate_joint_id", 11: "undefined", 12: "automatic_mode_safeguard_stop",
-                13: "system_three_position_enabling_stop"}
+SAFETY_MODES = {
+    1: "normal",
+    2: "reduced",
+    3: "protective_stop",
+    4: "recovery",
+    5: "safeguard_stop",
+    6: "system_emergency_stop",
+    7: "robot_emergency_stop",
+    8: "violation",
+    9: "fault",
+    10: "validate_joint_id",
+    11: "undefined",
+    12: "automatic_mode_safeguard_stop",
+    13: "system_three_position_enabling_stop",
+}
 
 
 def _rtde_classes():
@@ -36,6 +46,7 @@ def _rtde_classes():
     import rtde_control
     import rtde_io
     import rtde_receive
+
     return rtde_control.RTDEControlInterface, rtde_receive.RTDEReceiveInterface, rtde_io.RTDEIOInterface
 
 
@@ -79,44 +90,108 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
 
     name = "ur_rtde"
 
-    PARAMETERS = ParamSchema([
-        Param("robot_ip", "", doc="controller address; empty: never connect"),
-        Param("armed", False, doc="must be true to connect and move the robot"),
-        Param("frequency", 500.0, "Hz", "servoJ rate: 500 e-Series, 125 CB3", low=10.0, high=1000.0),
-        Param("lookahead_time", 0.1, "s", "servoJ lookahead (ur_rtde range)", low=0.03, high=0.2),
-        Param("gain", 300.0, "1", "servoJ proportional gain (ur_rtde range)", low=100.0, high=2000.0),
-        Param("joint_speed", 1.0, "rad/s", "MoveJ speed of the leading joint", low=0.0, high=3.14, low_open=True),
-        Param("joint_acceleration", 1.4, "rad/s^2", "MoveJ acceleration", low=0.0, high=40.0, low_open=True),
-        Param("linear_speed", 0.25, "m/s", "MoveL tool speed", low=0.0, high=3.0, low_open=True),
-        Param("linear_acceleration", 1.2, "m/s^2", "MoveL tool acceleration", low=0.0, high=150.0, low_open=True),
-        Param("joint_stop_deceleration", 2.0, "rad/s^2", "stopJ deceleration (STOP of a MoveJ)",
-              low=0.0, high=40.0, low_open=True),
-        Param("linear_stop_deceleration", 10.0, "m/s^2", "stopL deceleration (STOP of a MoveL)",
-              low=0.0, high=150.0, low_open=True),
-        Param("servo_stop_deceleration", 10.0, "rad/s^2", "servoStop deceleration (STOP of streaming)",
-              low=0.0, high=40.0, low_open=True),
-        Param("stream_timeout", 0.1, "s", "without a new SET_JOINTS before streaming stops", low=0.0, high=5.0,
-              low_open=True),
-        Param("gripper_output", 0, "", "standard digital output driving the gripper", low=0, high=7),
-        Param("reconnect_attempts", 3, "", "connection attempts before giving up", low=1, high=20),
-        Param("reconnect_backoff", 0.5, "s", "first wait between attempts, doubled each time", low=0.0, high=10.0),
-        Param("goal_tolerance", 0.002, "rad", "largest joint error (MoveJ) / orientation error (MoveL) "
-              "of the measured arm for SUCCESS", low=0.0, high=0.1, low_open=True),
-        Param("goal_position_tolerance", 0.002, "m", "largest measured tool position error for a MoveL SUCCESS",
-              low=0.0, high=0.05, low_open=True),
-        Param("settle_time", 0.5, "s", "how long a finished move may take to come within tolerance",
-              low=0.0, high=5.0),
-    ])
+    PARAMETERS = ParamSchema(
+        [
+            Param("robot_ip", "", doc="controller address; empty: never connect"),
+            Param("armed", False, doc="must be true to connect and move the robot"),
+            Param("frequency", 500.0, "Hz", "servoJ rate: 500 e-Series, 125 CB3", low=10.0, high=1000.0),
+            Param("lookahead_time", 0.1, "s", "servoJ lookahead (ur_rtde range)", low=0.03, high=0.2),
+            Param("gain", 300.0, "1", "servoJ proportional gain (ur_rtde range)", low=100.0, high=2000.0),
+            Param("joint_speed", 1.0, "rad/s", "MoveJ speed of the leading joint", low=0.0, high=3.14, low_open=True),
+            Param("joint_acceleration", 1.4, "rad/s^2", "MoveJ acceleration", low=0.0, high=40.0, low_open=True),
+            Param("linear_speed", 0.25, "m/s", "MoveL tool speed", low=0.0, high=3.0, low_open=True),
+            Param("linear_acceleration", 1.2, "m/s^2", "MoveL tool acceleration", low=0.0, high=150.0, low_open=True),
+            Param(
+                "joint_stop_deceleration",
+                2.0,
+                "rad/s^2",
+                "stopJ deceleration (STOP of a MoveJ)",
+                low=0.0,
+                high=40.0,
+                low_open=True,
+            ),
+            Param(
+                "linear_stop_deceleration",
+                10.0,
+                "m/s^2",
+                "stopL deceleration (STOP of a MoveL)",
+                low=0.0,
+                high=150.0,
+                low_open=True,
+            ),
+            Param(
+                "servo_stop_deceleration",
+                10.0,
+                "rad/s^2",
+                "servoStop deceleration (STOP of streaming)",
+                low=0.0,
+                high=40.0,
+                low_open=True,
+            ),
+            Param(
+                "stream_timeout",
+                0.1,
+                "s",
+                "without a new SET_JOINTS before streaming stops",
+                low=0.0,
+                high=5.0,
+                low_open=True,
+            ),
+            Param("gripper_output", 0, "", "standard digital output driving the gripper", low=0, high=7),
+            Param("reconnect_attempts", 3, "", "connection attempts before giving up", low=1, high=20),
+            Param("reconnect_backoff", 0.5, "s", "first wait between attempts, doubled each time", low=0.0, high=10.0),
+            Param(
+                "goal_tolerance",
+                0.002,
+                "rad",
+                "largest joint error (MoveJ) / orientation error (MoveL) of the measured arm for SUCCESS",
+                low=0.0,
+                high=0.1,
+                low_open=True,
+            ),
+            Param(
+                "goal_position_tolerance",
+                0.002,
+                "m",
+                "largest measured tool position error for a MoveL SUCCESS",
+                low=0.0,
+                high=0.05,
+                low_open=True,
+            ),
+            Param(
+                "settle_time", 0.5, "s", "how long a finished move may take to come within tolerance", low=0.0, high=5.0
+            ),
+        ]
+    )
 
-    def __init__(self, urdf_path: str, tool_frame: str = "tool0", robot_ip: str = "", armed: bool = False,
-                 frequency: float = 500.0, lookahead_time: float = 0.1, gain: float = 300.0,
-                 joint_speed: float = 1.0, joint_acceleration: float = 1.4, linear_speed: float = 0.25,
-                 linear_acceleration: float = 1.2, joint_stop_deceleration: float = 2.0,
-                 linear_stop_deceleration: float = 10.0, servo_stop_deceleration: float = 10.0,
-                 stream_timeout: float = 0.1, gripper_output: int = 0, reconnect_attempts: int = 3,
-                 reconnect_backoff: float = 0.5, goal_tolerance: float = 0.002,
-                 goal_position_tolerance: float = 0.002, settle_time: float = 0.5,
-                 robot_name: Optional[str] = None, rtde_classes=None, clock=time.monotonic, sleep=time.sleep):
+    def __init__(
+        self,
+        urdf_path: str,
+        tool_frame: str = "tool0",
+        robot_ip: str = "",
+        armed: bool = False,
+        frequency: float = 500.0,
+        lookahead_time: float = 0.1,
+        gain: float = 300.0,
+        joint_speed: float = 1.0,
+        joint_acceleration: float = 1.4,
+        linear_speed: float = 0.25,
+        linear_acceleration: float = 1.2,
+        joint_stop_deceleration: float = 2.0,
+        linear_stop_deceleration: float = 10.0,
+        servo_stop_deceleration: float = 10.0,
+        stream_timeout: float = 0.1,
+        gripper_output: int = 0,
+        reconnect_attempts: int = 3,
+        reconnect_backoff: float = 0.5,
+        goal_tolerance: float = 0.002,
+        goal_position_tolerance: float = 0.002,
+        settle_time: float = 0.5,
+        robot_name: str | None = None,
+        rtde_classes=None,
+        clock=time.monotonic,
+        sleep=time.sleep,
+    ):
         if not 0.03 <= lookahead_time <= 0.2:
             raise HwInterfaceError(f"lookahead_time must be 0.03-0.2 s (ur_rtde range), got {lookahead_time}")
         if not 100 <= gain <= 2000:
@@ -146,10 +221,10 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         # _lock guards the RTDE objects and the motion/streaming state. It is only ever held
         # for single controller calls: never across a motion, a sleep or a backoff.
         self._lock = threading.RLock()
-        self._connect_lock = threading.Lock()   # serialises login attempts (may back off)
-        self._target: Optional[np.ndarray] = None
+        self._connect_lock = threading.Lock()  # serialises login attempts (may back off)
+        self._target: np.ndarray | None = None
         self._target_time = 0.0
-        self._stream_thread: Optional[threading.Thread] = None
+        self._stream_thread: threading.Thread | None = None
         self._streaming = threading.Event()
         # Each stream thread serves one generation: a stop followed at once by a new
         # target starts a new generation, and the old thread (perhaps still waiting out its
@@ -157,11 +232,11 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         self._stream_generation = 0
         self._fault = ""
         self._gripper_on = False
-        self._active_move = None          # "moveJ" / "moveL" while an asynchronous move runs
-        self._move_token = 0              # increases with every move
-        self._stopped_token = 0           # the last move token a stop() cut short
+        self._active_move = None  # "moveJ" / "moveL" while an asynchronous move runs
+        self._move_token = 0  # increases with every move
+        self._stopped_token = 0  # the last move token a stop() cut short
         self._stop_reason = ""
-        self._wake = threading.Event()    # wakes a watching move at once on stop()
+        self._wake = threading.Event()  # wakes a watching move at once on stop()
         self.servo_periods = 0
         self.missed_periods = 0
 
@@ -169,11 +244,15 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
     def login(self, url: str = "", user: str = "", password: str = "") -> None:
         ip = url.replace("ur://", "").strip("/") if url and not url.startswith("sim") else self.robot_ip
         if not ip:
-            raise HwInterfaceError("no robot_ip: pass robot_ip:=<controller address> to connect to a UR",
-                                   Result.LOGIN_FAILED)
+            raise HwInterfaceError(
+                "no robot_ip: pass robot_ip:=<controller address> to connect to a UR", Result.LOGIN_FAILED
+            )
         if not self.armed:
-            raise HwInterfaceError(f"refusing to connect to the real robot at {ip}: the driver is not armed; "
-                                   "check the cell is clear, then start with armed:=true", Result.LOGIN_FAILED)
+            raise HwInterfaceError(
+                f"refusing to connect to the real robot at {ip}: the driver is not armed; "
+                "check the cell is clear, then start with armed:=true",
+                Result.LOGIN_FAILED,
+            )
         with self._connect_lock:
             with self._lock:
                 if self._control is not None:
@@ -194,7 +273,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                     with self._lock:
                         self._fault = f"connect to {ip} failed (attempt {attempt}): {exc}"
                     if attempt < self.reconnect_attempts:
-                        self._sleep(delay)   # never under the driver lock
+                        self._sleep(delay)  # never under the driver lock
                         delay *= 2
             raise HwInterfaceError(f"cannot connect to the UR controller at {ip}: {self._fault}", Result.LOGIN_FAILED)
 
@@ -226,8 +305,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         for attempt in range(self.reconnect_attempts + 1):
             with self._lock:
                 if self._control is None:
-                    raise HwInterfaceError("not connected to the UR controller: call LOGIN first",
-                                           Result.NOT_CONNECTED)
+                    raise HwInterfaceError("not connected to the UR controller: call LOGIN first", Result.NOT_CONNECTED)
                 try:
                     if self._control.isConnected() and self._receive.isConnected():
                         if attempt:
@@ -246,15 +324,15 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                 delay *= 2
         with self._lock:
             self._fault = "disconnected from the controller"
-        raise HwInterfaceError("lost the connection to the UR controller and could not reconnect",
-                               Result.NOT_CONNECTED)
+        raise HwInterfaceError("lost the connection to the UR controller and could not reconnect", Result.NOT_CONNECTED)
 
     def _ensure_can_move(self):
         self._ensure_connected()
         with self._lock:
             if self._receive.isProtectiveStopped() or self._receive.isEmergencyStopped():
-                raise HwInterfaceError("the robot is in a protective or emergency stop: clear it on the pendant",
-                                       Result.PROTECTIVE_STOP)
+                raise HwInterfaceError(
+                    "the robot is in a protective or emergency stop: clear it on the pendant", Result.PROTECTIVE_STOP
+                )
 
     # -- state -----------------------------------------------------------------------------
     def get_robot_joints(self) -> np.ndarray:
@@ -278,8 +356,14 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                 safety = SAFETY_MODES.get(self._receive.getSafetyMode(), "unknown") if connected else ""
             except Exception as exc:
                 return DriverStatus(connected=False, fault=f"status read failed: {exc}")
-            return DriverStatus(connected=connected, moving=moving, fault=self._fault, protective_stop=stopped,
-                                safety_mode=safety, gripper="on" if self._gripper_on else "")
+            return DriverStatus(
+                connected=connected,
+                moving=moving,
+                fault=self._fault,
+                protective_stop=stopped,
+                safety_mode=safety,
+                gripper="on" if self._gripper_on else "",
+            )
 
     # -- motion ----------------------------------------------------------------------------
     def set_joints(self, joints) -> None:
@@ -292,22 +376,25 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
             if not self._streaming.is_set():
                 self._streaming.set()
                 self._stream_generation += 1
-                self._stream_thread = threading.Thread(target=self._stream_loop, args=(self._stream_generation,),
-                                                       name="ur-servoj", daemon=True)
+                self._stream_thread = threading.Thread(
+                    target=self._stream_loop, args=(self._stream_generation,), name="ur-servoj", daemon=True
+                )
                 self._stream_thread.start()
 
     def move_j(self, joints, timeout: float = 30.0, asynchronous: bool = False) -> None:
         goal = np.asarray(joints, dtype=float)
         token, before = self._start_move(
-            "moveJ", lambda control: control.moveJ(list(map(float, goal)), self.joint_speed,
-                                                   self.joint_acceleration, True))
+            "moveJ",
+            lambda control: control.moveJ(list(map(float, goal)), self.joint_speed, self.joint_acceleration, True),
+        )
         if not asynchronous:
             self._watch("moveJ", token, before, timeout, lambda q: self._joint_error(q, goal))
 
     def move_l(self, position, orientation, timeout: float = 30.0, asynchronous: bool = False) -> None:
         pose = pose_to_ur(position, orientation)
         token, before = self._start_move(
-            "moveL", lambda control: control.moveL(pose, self.linear_speed, self.linear_acceleration, True))
+            "moveL", lambda control: control.moveL(pose, self.linear_speed, self.linear_acceleration, True)
+        )
         if not asynchronous:
             self._watch("moveL", token, before, timeout, lambda q: self._pose_error(q, position, orientation))
 
@@ -372,8 +459,9 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
             return token, before
         if stopped:
             raise HwInterfaceError(f"{kind} refused: the robot is in a protective stop", Result.PROTECTIVE_STOP)
-        raise HwInterfaceError(f"{kind} refused by the controller (unreachable or outside its limits)",
-                               Result.DRIVER_FAULT)
+        raise HwInterfaceError(
+            f"{kind} refused by the controller (unreachable or outside its limits)", Result.DRIVER_FAULT
+        )
 
     def _interrupted(self, kind, token, why):
         with self._lock:
@@ -417,14 +505,16 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                     if error <= tolerance:
                         return
                     if now - ended_at > self.settle_time:
-                        raise HwInterfaceError(f"{kind} ended {error:.4f} {unit} from the goal (tolerance "
-                                               f"{tolerance:g}): the controller stopped short", Result.INTERRUPTED)
+                        raise HwInterfaceError(
+                            f"{kind} ended {error:.4f} {unit} from the goal (tolerance "
+                            f"{tolerance:g}): the controller stopped short",
+                            Result.INTERRUPTED,
+                        )
                 elif now >= deadline:
                     pass  # handled below, outside the poll
             if ended_at is None and self._clock() >= deadline:
                 self.stop(reason="timeout")
-                raise HwInterfaceError(f"{kind} did not finish within {timeout:.1f} s; robot stopped",
-                                       Result.TIMEOUT)
+                raise HwInterfaceError(f"{kind} did not finish within {timeout:.1f} s; robot stopped", Result.TIMEOUT)
             self._wake.wait(self.period)
 
     def _stop_streaming(self):

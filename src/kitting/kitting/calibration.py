@@ -14,9 +14,10 @@ Extrinsics: ``extrinsics_from_marker`` detects the cell's ArUco marker
 frame (cell YAML): T_base_cam = T_base_marker * inv(T_cam_marker). A missing marker, a wrong
 id or a marker partly outside the image is refused with a reason, never guessed.
 """
+
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import List, Optional, Sequence, Tuple
 
 import cv2
 import numpy as np
@@ -29,9 +30,9 @@ from .cell import Marker
 # -- ChArUco board --------------------------------------------------------------------------
 @dataclass(frozen=True)
 class BoardSpec:
-    squares: Tuple[int, int] = (7, 5)     # squares along x, y
-    square: float = 0.04                  # m
-    marker: float = 0.03                  # m
+    squares: tuple[int, int] = (7, 5)  # squares along x, y
+    square: float = 0.04  # m
+    marker: float = 0.03  # m
     dictionary: str = "DICT_5X5_100"
 
     def board(self):
@@ -39,11 +40,11 @@ class BoardSpec:
         return cv2.aruco.CharucoBoard(self.squares, self.square, self.marker, aruco_dict)
 
     @property
-    def size(self) -> Tuple[float, float]:
+    def size(self) -> tuple[float, float]:
         """m, the board's chessboard area (x, y)."""
         return self.squares[0] * self.square, self.squares[1] * self.square
 
-    def image(self, pixels_per_square: int = 80, margin_squares: float = 0.5) -> Tuple[np.ndarray, Tuple[float, float]]:
+    def image(self, pixels_per_square: int = 80, margin_squares: float = 0.5) -> tuple[np.ndarray, tuple[float, float]]:
         """(printable grey image with a white margin, its physical size in m (x, y))."""
         w, h = (n * pixels_per_square for n in self.squares)
         image = self.board().generateImage((w, h), marginSize=0, borderBits=1)
@@ -61,10 +62,10 @@ class CalibrationResult:
     the intrinsics."""
 
     intrinsics: CameraIntrinsics
-    rms: float = float("nan")              # px, overall RMS reprojection error
-    per_view_rms: List[float] = field(default_factory=list)
+    rms: float = float("nan")  # px, overall RMS reprojection error
+    per_view_rms: list[float] = field(default_factory=list)
     views_used: int = 0
-    views_rejected: List[Tuple[int, str]] = field(default_factory=list)
+    views_rejected: list[tuple[int, str]] = field(default_factory=list)
 
     @property
     def K(self) -> np.ndarray:
@@ -75,7 +76,7 @@ class CalibrationResult:
         return np.array(self.intrinsics.distortion)
 
     @property
-    def image_size(self) -> Tuple[int, int]:
+    def image_size(self) -> tuple[int, int]:
         return self.intrinsics.image_size
 
     @property
@@ -87,7 +88,7 @@ class CalibrationResult:
         return self.intrinsics.fy
 
 
-def Intrinsics(K, distortion, image_size: Tuple[int, int], rms: float = float("nan")) -> CalibrationResult:  # noqa: N802
+def Intrinsics(K, distortion, image_size: tuple[int, int], rms: float = float("nan")) -> CalibrationResult:  # noqa: N802
     """A CalibrationResult of camera matrix ``K``, ``distortion`` and ``image_size`` (width,
     height) with RMS error ``rms``: the constructor of the calibration result under its
     former name, for the callers written against it (nodes/kitting_cell_sim)."""
@@ -111,8 +112,13 @@ def detect_board(image, spec: BoardSpec, min_corners: int = 8):
     return (np.asarray(objects, np.float32).reshape(-1, 3), np.asarray(pixels, np.float32).reshape(-1, 2)), ""
 
 
-def calibrate_intrinsics(images: Sequence[np.ndarray], spec: BoardSpec = BoardSpec(), flags: int = 0,
-                         min_corners: int = 8, min_views: int = 4) -> CalibrationResult:
+def calibrate_intrinsics(
+    images: Sequence[np.ndarray],
+    spec: BoardSpec = BoardSpec(),
+    flags: int = 0,
+    min_corners: int = 8,
+    min_views: int = 4,
+) -> CalibrationResult:
     """Intrinsics from ChArUco board images (all of the same size). ValueError when fewer
     than ``min_views`` images show enough of the board."""
     objects, pixels, rejected, size = [], [], [], None
@@ -132,26 +138,37 @@ def calibrate_intrinsics(images: Sequence[np.ndarray], spec: BoardSpec = BoardSp
         pixels.append(found[1])
     if len(objects) < min_views:
         raise ValueError(f"only {len(objects)} usable board views (need {min_views}); rejected: {rejected}")
-    rms, K, dist, _, _, _, _, per_view = cv2.calibrateCameraExtended(
-        objects, pixels, size, None, None, flags=flags)
-    return CalibrationResult(CameraIntrinsics.from_matrix(K, dist.ravel(), size), float(rms),
-                             [float(e) for e in np.ravel(per_view)], len(objects), rejected)
+    rms, K, dist, _, _, _, _, per_view = cv2.calibrateCameraExtended(objects, pixels, size, None, None, flags=flags)
+    return CalibrationResult(
+        CameraIntrinsics.from_matrix(K, dist.ravel(), size),
+        float(rms),
+        [float(e) for e in np.ravel(per_view)],
+        len(objects),
+        rejected,
+    )
 
 
 def write_intrinsics_yaml(path: str, intrinsics: CalibrationResult, camera_name: str = "kitting_camera") -> str:
     """A ROS camera_info-style YAML (camera_calibration_parsers' format) of a calibration
     result, written atomically; returns the absolute path."""
     import yaml
+
     from motion_common.atomic_file import write_atomic
+
     w, h = intrinsics.image_size
     K = intrinsics.K
     P = np.c_[K, np.zeros(3)]
     data = {
-        "image_width": int(w), "image_height": int(h), "camera_name": camera_name,
+        "image_width": int(w),
+        "image_height": int(h),
+        "camera_name": camera_name,
         "camera_matrix": {"rows": 3, "cols": 3, "data": [float(v) for v in K.ravel()]},
         "distortion_model": "plumb_bob",
-        "distortion_coefficients": {"rows": 1, "cols": len(intrinsics.distortion),
-                                    "data": [float(v) for v in intrinsics.distortion]},
+        "distortion_coefficients": {
+            "rows": 1,
+            "cols": len(intrinsics.distortion),
+            "data": [float(v) for v in intrinsics.distortion],
+        },
         "rectification_matrix": {"rows": 3, "cols": 3, "data": [float(v) for v in np.eye(3).ravel()]},
         "projection_matrix": {"rows": 3, "cols": 4, "data": [float(v) for v in P.ravel()]},
         "reprojection_error_px": float(intrinsics.rms),
@@ -168,8 +185,8 @@ class MarkerObservation:
 
     ok: bool
     reason: str = ""
-    corners: Optional[np.ndarray] = None
-    T_cam_marker: Optional[np.ndarray] = None
+    corners: np.ndarray | None = None
+    T_cam_marker: np.ndarray | None = None
     reprojection_px: float = float("nan")
     partly_outside: bool = False
 
@@ -188,15 +205,22 @@ def observe_marker(image, marker: Marker, K, distortion, edge_margin_px: float =
         return MarkerObservation(False, "corrupt image")
     corners, ids, _ = marker_detector(marker.dictionary).detectMarkers(_grey(image))
     if ids is None or marker.id not in np.ravel(ids):
-        return MarkerObservation(False, "no marker" if ids is None else
-                                 f"marker {marker.id} not found (saw ids {sorted(int(i) for i in np.ravel(ids))})")
+        return MarkerObservation(
+            False,
+            "no marker"
+            if ids is None
+            else f"marker {marker.id} not found (saw ids {sorted(int(i) for i in np.ravel(ids))})",
+        )
     found = [c.reshape(4, 2) for c, i in zip(corners, np.ravel(ids)) if i == marker.id]
     if len(found) > 1:
         return MarkerObservation(False, f"marker {marker.id} seen {len(found)} times")
     pixels = found[0].astype(np.float64)
     h, w = image.shape[:2]
-    if (pixels.min() < edge_margin_px or pixels[:, 0].max() > w - 1 - edge_margin_px
-            or pixels[:, 1].max() > h - 1 - edge_margin_px):
+    if (
+        pixels.min() < edge_margin_px
+        or pixels[:, 0].max() > w - 1 - edge_margin_px
+        or pixels[:, 1].max() > h - 1 - edge_margin_px
+    ):
         return MarkerObservation(False, "marker partly outside the image", pixels, partly_outside=True)
     half = marker.size / 2
     objects = np.array([[-half, half, 0], [half, half, 0], [half, -half, 0], [-half, -half, 0]], np.float64)
@@ -219,11 +243,11 @@ class Extrinsics:
 
     ok: bool
     reason: str = ""
-    T_base_cam: Optional[np.ndarray] = None
+    T_base_cam: np.ndarray | None = None
     reprojection_px: float = float("nan")
-    used: List[int] = field(default_factory=list)
-    missing: List[Tuple[int, str]] = field(default_factory=list)
-    partly_hidden: List[int] = field(default_factory=list)
+    used: list[int] = field(default_factory=list)
+    missing: list[tuple[int, str]] = field(default_factory=list)
+    partly_hidden: list[int] = field(default_factory=list)
 
 
 def extrinsics_from_marker(image, markers, K, distortion, require_all: bool = False) -> Extrinsics:
@@ -266,7 +290,7 @@ def extrinsics_from_marker(image, markers, K, distortion, require_all: bool = Fa
     return Extrinsics(True, "", np.linalg.inv(T_cam_base), error, used, missing, hidden)
 
 
-def pose_error(T_estimate, T_true) -> Tuple[float, float]:
+def pose_error(T_estimate, T_true) -> tuple[float, float]:
     """(position error m, rotation error deg) between two 4x4 poses."""
     delta = np.linalg.inv(T_true) @ T_estimate
     angle = math.degrees(math.acos(np.clip((np.trace(delta[:3, :3]) - 1) / 2, -1.0, 1.0)))

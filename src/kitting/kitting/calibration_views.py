@@ -11,7 +11,6 @@ only when
 
 and returns (taken, reason) so the tool can print progress. Detection runs on a grey copy.
 """
-from typing import List, Optional, Tuple
 
 import cv2
 import numpy as np
@@ -25,21 +24,27 @@ def _grey(image: np.ndarray) -> np.ndarray:
 
 
 class ViewCollector:
-    def __init__(self, spec: BoardSpec = BoardSpec(), count: int = 20, min_corners: int = 8,
-                 interval: float = 1.0, min_motion_px: float = 20.0):
+    def __init__(
+        self,
+        spec: BoardSpec = BoardSpec(),
+        count: int = 20,
+        min_corners: int = 8,
+        interval: float = 1.0,
+        min_motion_px: float = 20.0,
+    ):
         if count < 1 or min_corners < 4 or interval < 0 or min_motion_px < 0:
             raise ValueError("need count >= 1, min_corners >= 4, interval >= 0 s, min_motion_px >= 0")
         self.spec, self.count, self.min_corners = spec, count, min_corners
         self.interval, self.min_motion_px = interval, min_motion_px
-        self.views: List[np.ndarray] = []           # the frames taken, as given
-        self.last_time: Optional[float] = None
-        self.last_points: Optional[dict] = None     # board corner (x, y) in m -> pixel
+        self.views: list[np.ndarray] = []  # the frames taken, as given
+        self.last_time: float | None = None
+        self.last_points: dict | None = None  # board corner (x, y) in m -> pixel
 
     @property
     def done(self) -> bool:
         return len(self.views) >= self.count
 
-    def offer(self, image, t: float) -> Tuple[bool, str]:
+    def offer(self, image, t: float) -> tuple[bool, str]:
         """Take ``image`` (seen at stream time ``t``, s) as a view if it qualifies."""
         if self.done:
             return False, f"already {self.count} views"
@@ -55,8 +60,11 @@ class ViewCollector:
             if len(common) >= len(points) / 2:
                 shift = float(np.mean([np.linalg.norm(points[k] - self.last_points[k]) for k in common]))
                 if shift < self.min_motion_px:
-                    return False, f"board moved {shift:.0f} px since the last view (move it at least " \
-                                  f"{self.min_motion_px:.0f} px, or tilt it)"
+                    return (
+                        False,
+                        f"board moved {shift:.0f} px since the last view (move it at least "
+                        f"{self.min_motion_px:.0f} px, or tilt it)",
+                    )
         self.views.append(np.asarray(image).copy())
         self.last_time, self.last_points = t, points
         return True, f"{len(points)} corners"

@@ -14,8 +14,9 @@ undistorted first.
 no display). It costs ~100 ms per 640x480 image and holds the interpreter while it runs:
 a node renders in its own process (``kitting.render_worker``), never in the physics thread.
 """
+
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Optional, Sequence, Tuple
 
 import cv2
 import numpy as np
@@ -39,11 +40,14 @@ def projection_matrix(camera: PinholeCamera) -> Sequence[float]:
     the camera's near and far planes."""
     w, h, n, f = camera.width, camera.height, camera.near, camera.far
     fx, fy, cx, cy = camera.K[0, 0], camera.K[1, 1], camera.K[0, 2], camera.K[1, 2]
-    M = np.array([
-        [2 * fx / w, 0.0, 1.0 - 2 * (cx + 0.5) / w, 0.0],
-        [0.0, 2 * fy / h, 2 * (cy + 0.5) / h - 1.0, 0.0],
-        [0.0, 0.0, -(f + n) / (f - n), -2 * f * n / (f - n)],
-        [0.0, 0.0, -1.0, 0.0]])
+    M = np.array(
+        [
+            [2 * fx / w, 0.0, 1.0 - 2 * (cx + 0.5) / w, 0.0],
+            [0.0, 2 * fy / h, 2 * (cy + 0.5) / h - 1.0, 0.0],
+            [0.0, 0.0, -(f + n) / (f - n), -2 * f * n / (f - n)],
+            [0.0, 0.0, -1.0, 0.0],
+        ]
+    )
     return tuple(M.T.ravel())
 
 
@@ -57,15 +61,16 @@ def depth_from_buffer(camera: PinholeCamera, buffer) -> np.ndarray:
 class Lighting:
     """TinyRenderer light: direction (towards the light, base frame) and coefficients."""
 
-    direction: Tuple[float, float, float] = (0.2, -0.3, 1.0)
-    color: Tuple[float, float, float] = (1.0, 1.0, 1.0)
+    direction: tuple[float, float, float] = (0.2, -0.3, 1.0)
+    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
     ambient: float = 0.6
     diffuse: float = 0.45
     specular: float = 0.0
 
 
-def render(client: int, camera: PinholeCamera, lighting: Optional[Lighting] = None,
-           depth: bool = False, supersample: int = 1):
+def render(
+    client: int, camera: PinholeCamera, lighting: Lighting | None = None, depth: bool = False, supersample: int = 1
+):
     """Render the scene of pybullet client ``client`` as seen by ``camera`` with the CPU
     TinyRenderer. Returns an RGB uint8 image (height x width x 3), and with ``depth`` also
     the metric depth image (m, float32).
@@ -77,20 +82,29 @@ def render(client: int, camera: PinholeCamera, lighting: Optional[Lighting] = No
     calibration images); the detector does not need it."""
     lighting = lighting or Lighting()
     if supersample > 1:
-        big = render(client, camera.scaled(camera.width * supersample, camera.height * supersample),
-                     lighting, depth)
+        big = render(client, camera.scaled(camera.width * supersample, camera.height * supersample), lighting, depth)
         size = (camera.width, camera.height)
         if not depth:
             return cv2.resize(big, size, interpolation=cv2.INTER_AREA)
-        return (cv2.resize(big[0], size, interpolation=cv2.INTER_AREA),
-                cv2.resize(big[1], size, interpolation=cv2.INTER_AREA))
+        return (
+            cv2.resize(big[0], size, interpolation=cv2.INTER_AREA),
+            cv2.resize(big[1], size, interpolation=cv2.INTER_AREA),
+        )
     _, _, rgba, buffer, _ = p.getCameraImage(
-        camera.width, camera.height, viewMatrix=view_matrix(camera),
-        projectionMatrix=projection_matrix(camera), renderer=p.ER_TINY_RENDERER,
-        shadow=0, lightDirection=list(lighting.direction), lightColor=list(lighting.color),
-        lightAmbientCoeff=lighting.ambient, lightDiffuseCoeff=lighting.diffuse,
-        lightSpecularCoeff=lighting.specular, flags=p.ER_NO_SEGMENTATION_MASK,
-        physicsClientId=client)
+        camera.width,
+        camera.height,
+        viewMatrix=view_matrix(camera),
+        projectionMatrix=projection_matrix(camera),
+        renderer=p.ER_TINY_RENDERER,
+        shadow=0,
+        lightDirection=list(lighting.direction),
+        lightColor=list(lighting.color),
+        lightAmbientCoeff=lighting.ambient,
+        lightDiffuseCoeff=lighting.diffuse,
+        lightSpecularCoeff=lighting.specular,
+        flags=p.ER_NO_SEGMENTATION_MASK,
+        physicsClientId=client,
+    )
     rgb = np.asarray(rgba, np.uint8).reshape(camera.height, camera.width, 4)[:, :, :3].copy()
     if not depth:
         return rgb

@@ -8,10 +8,11 @@ classification), the kitting node's events and each part's final place; ``summar
 the figures and ``table`` the per-class table; ``plot_confusion`` draws the confusion
 matrix.
 """
+
 import math
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
-from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -24,25 +25,28 @@ UNKNOWN = "(missed)"
 class Trial:
     index: int
     class_name: str
-    y_offset: float          # m across the belt
-    yaw: float               # rad
-    belt_speed: float = math.nan     # m/s; NaN keeps the cell's
+    y_offset: float  # m across the belt
+    yaw: float  # rad
+    belt_speed: float = math.nan  # m/s; NaN keeps the cell's
     light_level: float = math.nan
-    camera_offset: List[float] = field(default_factory=list)   # [dx dy dz (m), rx ry rz (rad)]
+    camera_offset: list[float] = field(default_factory=list)  # [dx dy dz (m), rx ry rz (rad)]
 
 
-def plan_trials(count: int, seed: int, perturb: bool, belt_speed: float, max_y_offset: float = 0.06) -> List[Trial]:
+def plan_trials(count: int, seed: int, perturb: bool, belt_speed: float, max_y_offset: float = 0.06) -> list[Trial]:
     """``count`` trials cycling through the six classes, drawn from ``seed``."""
     rng = np.random.default_rng(seed)
     trials = []
     for index in range(count):
-        trial = Trial(index, CLASS_NAMES[index % len(CLASS_NAMES)], float(rng.uniform(-max_y_offset, max_y_offset)),
-                      float(rng.uniform(-math.pi, math.pi)))
+        trial = Trial(
+            index,
+            CLASS_NAMES[index % len(CLASS_NAMES)],
+            float(rng.uniform(-max_y_offset, max_y_offset)),
+            float(rng.uniform(-math.pi, math.pi)),
+        )
         if perturb:
             trial.belt_speed = float(belt_speed * rng.uniform(0.7, 1.3))
             trial.light_level = float(rng.uniform(0.7, 1.2))
-            trial.camera_offset = (list(rng.uniform(-0.02, 0.02, 3))
-                                   + list(np.radians(rng.uniform(-2.0, 2.0, 3))))
+            trial.camera_offset = list(rng.uniform(-0.02, 0.02, 3)) + list(np.radians(rng.uniform(-2.0, 2.0, 3)))
         trials.append(trial)
     return trials
 
@@ -54,12 +58,12 @@ class PartRecord:
     trial: Trial
     part_id: int
     spawned: float
-    predictions: Counter = field(default_factory=Counter)   # predicted class -> sightings
-    pose_errors_mm: List[float] = field(default_factory=list)
-    events: List[str] = field(default_factory=list)
+    predictions: Counter = field(default_factory=Counter)  # predicted class -> sightings
+    pose_errors_mm: list[float] = field(default_factory=list)
+    events: list[str] = field(default_factory=list)
     final_state: str = ""
     slot: str = ""
-    resolved: Optional[float] = None
+    resolved: float | None = None
     reason: str = ""
 
     @property
@@ -92,11 +96,11 @@ class CampaignStats:
     """Collects observations, events and outcomes of the parts of a campaign."""
 
     def __init__(self, match_radius: float = 0.03):
-        self.parts: Dict[int, PartRecord] = {}
+        self.parts: dict[int, PartRecord] = {}
         self.match_radius = match_radius
         self.unmatched_detections = 0
-        self.started: Optional[float] = None
-        self.finished: Optional[float] = None
+        self.started: float | None = None
+        self.finished: float | None = None
 
     def add_part(self, trial: Trial, part_id: int, now: float):
         self.parts[part_id] = PartRecord(trial, part_id, now)
@@ -145,15 +149,34 @@ class CampaignStats:
             "unmatched_detections": self.unmatched_detections,
             "unverified_picks": sum(r.unverified_picks for r in records),
             "per_class": self.per_class(),
-            "failures": [{"trial": r.trial.index, "class": r.trial.class_name, "state": r.final_state,
-                          "slot": r.slot, "predicted": r.predicted, "events": r.events, "reason": r.reason}
-                         for r in records if not r.success],
-            "trials_detail": [dict(asdict(r.trial), part_id=r.part_id, success=r.success, predicted=r.predicted,
-                                   events=r.events, final_state=r.final_state, slot=r.slot)
-                              for r in records],
+            "failures": [
+                {
+                    "trial": r.trial.index,
+                    "class": r.trial.class_name,
+                    "state": r.final_state,
+                    "slot": r.slot,
+                    "predicted": r.predicted,
+                    "events": r.events,
+                    "reason": r.reason,
+                }
+                for r in records
+                if not r.success
+            ],
+            "trials_detail": [
+                dict(
+                    asdict(r.trial),
+                    part_id=r.part_id,
+                    success=r.success,
+                    predicted=r.predicted,
+                    events=r.events,
+                    final_state=r.final_state,
+                    slot=r.slot,
+                )
+                for r in records
+            ],
         }
 
-    def per_class(self) -> Dict[str, dict]:
+    def per_class(self) -> dict[str, dict]:
         table = {}
         for name in CLASS_NAMES:
             records = [r for r in self.parts.values() if r.trial.class_name == name]
@@ -181,17 +204,23 @@ class CampaignStats:
         """The per-class table as text."""
         lines = [f"{'class':<15}{'trials':>7}{'detect':>8}{'class.':>8}{'pick':>6}{'place':>7}{'pose p95 mm':>13}"]
         for name, row in self.per_class().items():
-            lines.append(f"{name:<15}{row['trials']:>7}{row['detected']:>8}{row['classified']:>8}{row['picked']:>6}"
-                         f"{row['placed']:>7}{row['pose_error_mm_p95']:>13.2f}")
+            lines.append(
+                f"{name:<15}{row['trials']:>7}{row['detected']:>8}{row['classified']:>8}{row['picked']:>6}"
+                f"{row['placed']:>7}{row['pose_error_mm_p95']:>13.2f}"
+            )
         return "\n".join(lines)
 
     def plot_confusion(self, path: str, title: str = "kitting campaign: classification"):
         """Write the confusion matrix as a PNG (atomically)."""
         import matplotlib
+
         matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        from motion_common.atomic_file import write_atomic
         import io
+
+        import matplotlib.pyplot as plt
+
+        from motion_common.atomic_file import write_atomic
+
         matrix = self.confusion()
         labels = list(CLASS_NAMES) + ["missed"]
         fig, ax = plt.subplots(figsize=(7.5, 5.5))
@@ -202,8 +231,9 @@ class CampaignStats:
         ax.set_ylabel("true class")
         for (i, j), value in np.ndenumerate(matrix):
             if value:
-                ax.text(j, i, str(value), ha="center", va="center",
-                        color="white" if value > matrix.max() / 2 else "black")
+                ax.text(
+                    j, i, str(value), ha="center", va="center", color="white" if value > matrix.max() / 2 else "black"
+                )
         ax.set_title(title)
         fig.tight_layout()
         buffer = io.BytesIO()

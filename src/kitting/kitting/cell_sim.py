@@ -14,10 +14,10 @@ increments up to ``t``. When the caller falls far behind, the physics skips ahea
 update counts as an overrun; ``real_time_factor`` says how much physics time was stepped
 per second of the clock.
 """
+
 import math
 from collections import deque
 from dataclasses import dataclass
-from typing import Dict, List, Optional
 
 import numpy as np
 import pybullet as p
@@ -26,12 +26,12 @@ from .cell import Cell
 from .parts import PART_CLASSES
 from .sim_scene import FOREIGN_CLASS, FOREIGN_HALF_EXTENTS, SimScene
 
-SPAWN_MARGIN = 0.03        # m, a new part's centre from the belt's upstream end
-SETTLE_SPEED = 0.01        # m/s, below this a falling part counts as still
-SETTLE_TIME = 0.2          # s, still for this long: resting
-MAX_CATCH_UP = 0.25        # s of physics stepped at most per advance(); more is an overrun
-TRAY_DEPTH = 0.05          # m above the tray floor that still counts as in the tray (stacked parts)
-PART_DENSITY_MASS = {"bolt": 0.025, "nut": 0.017, "washer": 0.004, FOREIGN_CLASS: 0.01}   # kg
+SPAWN_MARGIN = 0.03  # m, a new part's centre from the belt's upstream end
+SETTLE_SPEED = 0.01  # m/s, below this a falling part counts as still
+SETTLE_TIME = 0.2  # s, still for this long: resting
+MAX_CATCH_UP = 0.25  # s of physics stepped at most per advance(); more is an overrun
+TRAY_DEPTH = 0.05  # m above the tray floor that still counts as in the tray (stacked parts)
+PART_DENSITY_MASS = {"bolt": 0.025, "nut": 0.017, "washer": 0.004, FOREIGN_CLASS: 0.01}  # kg
 
 
 @dataclass
@@ -42,7 +42,7 @@ class CellPartState:
     class_name: str
     position: np.ndarray
     orientation: np.ndarray
-    state: str               # belt | held | falling | resting | gone
+    state: str  # belt | held | falling | resting | gone
     slot: str = ""
 
 
@@ -50,10 +50,10 @@ class _Part:
     def __init__(self, part_id, class_name):
         self.part_id, self.class_name = part_id, class_name
         self.state = "belt"
-        self.final_pose = None                 # (x, y, yaw) where it fell off the belt's end
-        self.body: Optional[int] = None        # dynamic body once off the belt
-        self.constraint: Optional[int] = None
-        self.still_since: Optional[float] = None
+        self.final_pose = None  # (x, y, yaw) where it fell off the belt's end
+        self.body: int | None = None  # dynamic body once off the belt
+        self.constraint: int | None = None
+        self.still_since: float | None = None
         self.slot = ""
 
     @property
@@ -82,20 +82,20 @@ class CellSimulation:
         p.setTimeStep(self.time_step, physicsClientId=self.client)
         self.scene = SimScene(self.client, cell)
         self.belt_speed = cell.belt.speed
-        self.parts: Dict[int, _Part] = {}
+        self.parts: dict[int, _Part] = {}
         self._next_id = 1
         self.time = float(start_time)
-        self._physics_time = self.time        # clock time the physics has been stepped to
+        self._physics_time = self.time  # clock time the physics has been stepped to
         self.tool_position = np.array([0.0, 0.0, 1.0])
         self.tool_orientation = np.array([1.0, 0.0, 0.0, 0.0])
         self.magnet_on = False
-        self.held: Optional[int] = None
+        self.held: int | None = None
         # The magnet: a kinematic body without collision that follows the tool; a gripped
         # part hangs from it by a fixed constraint.
         self._magnet = p.createMultiBody(0.0, -1, -1, [0, 0, 1], physicsClientId=self.client)
         self.steps = 0
         self.overruns = 0
-        self._rtf_window = deque()             # (clock time, physics seconds stepped)
+        self._rtf_window = deque()  # (clock time, physics seconds stepped)
 
     def close(self):
         """Disconnect the physics client."""
@@ -128,8 +128,13 @@ class CellSimulation:
     def set_tool_pose(self, position, orientation):
         """The robot's tool0 pose (m; quaternion x, y, z, w), base frame."""
         position, orientation = np.asarray(position, float), np.asarray(orientation, float)
-        if position.shape == (3,) and orientation.shape == (4,) and np.all(np.isfinite(position)) \
-                and np.all(np.isfinite(orientation)) and np.linalg.norm(orientation) > 0.5:
+        if (
+            position.shape == (3,)
+            and orientation.shape == (4,)
+            and np.all(np.isfinite(position))
+            and np.all(np.isfinite(orientation))
+            and np.linalg.norm(orientation) > 0.5
+        ):
             self.tool_position, self.tool_orientation = position, orientation / np.linalg.norm(orientation)
 
     def set_magnet(self, on: bool):
@@ -150,7 +155,7 @@ class CellSimulation:
         self.time = float(t)
         self.scene.step(dt, self.belt_speed)
         for part_id, state in list(self.scene.parts.items()):
-            if not state.on_belt:       # fell off the belt's end: out of the cell
+            if not state.on_belt:  # fell off the belt's end: out of the cell
                 part = self.parts[part_id]
                 part.state, part.final_pose = "gone", (state.x, state.y, state.yaw)
                 self.scene.remove_part(part_id)
@@ -185,8 +190,9 @@ class CellSimulation:
 
     def _update_magnet(self):
         face = self._magnet_face()
-        p.resetBasePositionAndOrientation(self._magnet, face.tolist(), self.tool_orientation.tolist(),
-                                          physicsClientId=self.client)
+        p.resetBasePositionAndOrientation(
+            self._magnet, face.tolist(), self.tool_orientation.tolist(), physicsClientId=self.client
+        )
         if not self.magnet_on or self.held is not None:
             return
         gripper = self.cell.gripper
@@ -226,14 +232,25 @@ class CellSimulation:
             position = [x, y, self.cell.belt.height + half[2]]
             orientation = p.getQuaternionFromEuler([0, 0, yaw])
             shape = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=self.client)
-            part.body = p.createMultiBody(PART_DENSITY_MASS[part.kind], shape, -1, position, orientation,
-                                          physicsClientId=self.client)
+            part.body = p.createMultiBody(
+                PART_DENSITY_MASS[part.kind], shape, -1, position, orientation, physicsClientId=self.client
+            )
             p.changeDynamics(part.body, -1, lateralFriction=0.8, restitution=0.0, physicsClientId=self.client)
         position, orientation = p.getBasePositionAndOrientation(part.body, physicsClientId=self.client)
         inv_pos, inv_orn = p.invertTransform(face.tolist(), self.tool_orientation.tolist())
         rel_pos, rel_orn = p.multiplyTransforms(inv_pos, inv_orn, position, orientation)
-        part.constraint = p.createConstraint(self._magnet, -1, part.body, -1, p.JOINT_FIXED, [0, 0, 0],
-                                             rel_pos, [0, 0, 0], rel_orn, physicsClientId=self.client)
+        part.constraint = p.createConstraint(
+            self._magnet,
+            -1,
+            part.body,
+            -1,
+            p.JOINT_FIXED,
+            [0, 0, 0],
+            rel_pos,
+            [0, 0, 0],
+            rel_orn,
+            physicsClientId=self.client,
+        )
         p.changeConstraint(part.constraint, maxForce=50.0, physicsClientId=self.client)
         part.state, part.slot = "held", ""
         self.held = part.part_id
@@ -253,7 +270,7 @@ class CellSimulation:
                 part.still_since = None
             position, _ = p.getBasePositionAndOrientation(part.body, physicsClientId=self.client)
             if position[2] < self.cell.belt.height - 1.0:
-                part.state = "gone"      # fell through the world: never counts as placed
+                part.state = "gone"  # fell through the world: never counts as placed
 
     def _slot_of(self, part: _Part) -> str:
         """Class of the tray slot whose footprint holds the part's centre, in the tray (on its
@@ -278,7 +295,7 @@ class CellSimulation:
             self.scene.remove_part(part_id)
 
     # -- outputs -----------------------------------------------------------------------------
-    def states(self) -> List[CellPartState]:
+    def states(self) -> list[CellPartState]:
         """Ground truth of every part at the current time."""
         out = []
         for part in self.parts.values():
@@ -287,13 +304,14 @@ class CellSimulation:
                 position = np.array([x, y, self.cell.belt.height])
                 orientation = np.array(p.getQuaternionFromEuler([0, 0, yaw]))
             else:
-                position, orientation = (np.array(v) for v in p.getBasePositionAndOrientation(
-                    part.body, physicsClientId=self.client))
-                position = position - [0, 0, part.half_extents[2]]     # bottom centre, like belt parts
+                position, orientation = (
+                    np.array(v) for v in p.getBasePositionAndOrientation(part.body, physicsClientId=self.client)
+                )
+                position = position - [0, 0, part.half_extents[2]]  # bottom centre, like belt parts
             out.append(CellPartState(part.part_id, part.class_name, position, orientation, part.state, part.slot))
         return out
 
-    def render_poses(self) -> List[tuple]:
+    def render_poses(self) -> list[tuple]:
         """The parts as ``SimScene.set_part_poses`` takes them (what the camera sees)."""
         poses = []
         for state in self.states():
@@ -302,6 +320,15 @@ class CellSimulation:
             if state.state == "belt":
                 poses.append((state.part_id, state.class_name) + self._belt_pose(self.parts[state.part_id]))
             else:
-                poses.append((state.part_id, state.class_name, float(state.position[0]), float(state.position[1]),
-                              0.0, float(state.position[2]), tuple(float(v) for v in state.orientation)))
+                poses.append(
+                    (
+                        state.part_id,
+                        state.class_name,
+                        float(state.position[0]),
+                        float(state.position[1]),
+                        0.0,
+                        float(state.position[2]),
+                        tuple(float(v) for v in state.orientation),
+                    )
+                )
         return poses

@@ -47,10 +47,11 @@ colour purity and how well the shape features match.
 ``PartDetector`` is the base of this detector and of the ONNX one (``onnx_detector``):
 the image check of step 1, the belt mask, its eroded inner region, and the records.
 """
+
 import abc
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable, List, Optional, Tuple
 
 import cv2
 import numpy as np
@@ -59,30 +60,51 @@ from motion_common.params import Param, ParamSchema
 
 from .parts import BOLT_HEAD, BOLT_SHAFT, PART_CLASSES
 
-DETECTOR_SCHEMA = ParamSchema([
-    Param("value_min", 95, "0-255", "V above which a grey pixel is foreground (silver)", low=0, high=255),
-    Param("saturation_min", 90, "0-255", "S above which a pixel is coloured", low=0, high=255),
-    Param("hue_yellow", [12.0, 40.0], "OpenCV hue 0-180", "yellow hue range", length=2, low=0.0, high=180.0),
-    Param("min_area_px", 25, "px", "smaller blobs are noise", low=1, high=100000),
-    Param("edge_px", 2, "px", "blobs this close to the image or belt border are 'edge'", low=0, high=100),
-    Param("colour_purity_min", 0.75, "", "fraction of a blob's pixels of one colour", low=0.0, high=1.0),
-    # A pixel is drawn when its centre is inside the part: an edge is within half a pixel,
-    # plus margin for the pixel's shape on the plane. A width may be off by 2 x this (one
-    # edge per side), an area by perimeter x this.
-    Param("edge_tolerance_px", 0.75, "px", "how far a silhouette edge may lie from the part's true outline",
-          low=0.0, high=10.0),
-    # The cell's camera (config/cell.yaml) is 0.55 m above the belt; the visible belt reaches
-    # 0.42 m from its nadir: slope 0.42 / (0.55 - 0.013) = 0.79.
-    Param("view_slope_max", 0.8, "", "largest horizontal distance of a part from the camera's nadir "
-          "/ camera height above the part's top, over the belt in view (parallax bound)", low=0.0, high=5.0),
-    Param("area_tolerance", 0.1, "", "relative footprint area error accepted beyond the parallax and pixel bounds",
-          low=0.0, high=2.0),
-    # A hexagon's corners are 120°, a box's 90°; parallax only opens corners (module docstring,
-    # 5.), pixels blur them: at 640x480 nuts measure >= 106°, boxes <= 94° (at 320x240 ~1 % of
-    # nuts fall below 100° and boxes reach 97°: the two are no longer told apart reliably).
-    Param("nut_corner_min", 100.0, "deg", "smallest corner of a nut's simplified outline", low=0.0, high=180.0),
-    Param("hole_ratio_min", 0.12, "", "hole/outline area above which a blob is a washer", low=0.0, high=1.0),
-])
+DETECTOR_SCHEMA = ParamSchema(
+    [
+        Param("value_min", 95, "0-255", "V above which a grey pixel is foreground (silver)", low=0, high=255),
+        Param("saturation_min", 90, "0-255", "S above which a pixel is coloured", low=0, high=255),
+        Param("hue_yellow", [12.0, 40.0], "OpenCV hue 0-180", "yellow hue range", length=2, low=0.0, high=180.0),
+        Param("min_area_px", 25, "px", "smaller blobs are noise", low=1, high=100000),
+        Param("edge_px", 2, "px", "blobs this close to the image or belt border are 'edge'", low=0, high=100),
+        Param("colour_purity_min", 0.75, "", "fraction of a blob's pixels of one colour", low=0.0, high=1.0),
+        # A pixel is drawn when its centre is inside the part: an edge is within half a pixel,
+        # plus margin for the pixel's shape on the plane. A width may be off by 2 x this (one
+        # edge per side), an area by perimeter x this.
+        Param(
+            "edge_tolerance_px",
+            0.75,
+            "px",
+            "how far a silhouette edge may lie from the part's true outline",
+            low=0.0,
+            high=10.0,
+        ),
+        # The cell's camera (config/cell.yaml) is 0.55 m above the belt; the visible belt reaches
+        # 0.42 m from its nadir: slope 0.42 / (0.55 - 0.013) = 0.79.
+        Param(
+            "view_slope_max",
+            0.8,
+            "",
+            "largest horizontal distance of a part from the camera's nadir "
+            "/ camera height above the part's top, over the belt in view (parallax bound)",
+            low=0.0,
+            high=5.0,
+        ),
+        Param(
+            "area_tolerance",
+            0.1,
+            "",
+            "relative footprint area error accepted beyond the parallax and pixel bounds",
+            low=0.0,
+            high=2.0,
+        ),
+        # A hexagon's corners are 120°, a box's 90°; parallax only opens corners (module docstring,
+        # 5.), pixels blur them: at 640x480 nuts measure >= 106°, boxes <= 94° (at 320x240 ~1 % of
+        # nuts fall below 100° and boxes reach 97°: the two are no longer told apart reliably).
+        Param("nut_corner_min", 100.0, "deg", "smallest corner of a nut's simplified outline", low=0.0, high=180.0),
+        Param("hole_ratio_min", 0.12, "", "hole/outline area above which a blob is a washer", low=0.0, high=1.0),
+    ]
+)
 
 # A nut's hull is simplified to within a tenth of its width across flats (1.8 mm): above the
 # pixel staircase (about 1 px = 0.9 mm at 640x480, 1.8 mm at 320x240), below the 5.2 mm by
@@ -93,23 +115,23 @@ NUT_POLYGON_EPSILON_MM = 0.1 * 1000.0 * PART_CLASSES["nut_yellow"].width
 @dataclass
 class Detection:
     class_name: str
-    pixel: Tuple[float, float]        # px, centroid
-    angle: float                      # rad, image orientation (x towards y)
-    confidence: float                 # 0-1
+    pixel: tuple[float, float]  # px, centroid
+    angle: float  # rad, image orientation (x towards y)
+    confidence: float  # 0-1
     features: dict = field(default_factory=dict)
 
 
 @dataclass
 class Rejection:
-    reason: str                       # "corrupt image" | "edge" | "unknown object"
-    pixel: Optional[Tuple[float, float]] = None
+    reason: str  # "corrupt image" | "edge" | "unknown object"
+    pixel: tuple[float, float] | None = None
     detail: str = ""
 
 
 @dataclass
 class DetectionResult:
-    detections: List[Detection] = field(default_factory=list)
-    rejections: List[Rejection] = field(default_factory=list)
+    detections: list[Detection] = field(default_factory=list)
+    rejections: list[Rejection] = field(default_factory=list)
 
     @property
     def corrupt(self) -> bool:
@@ -138,14 +160,14 @@ class BeltInner:
     def __init__(self):
         self._mask, self._key, self._inner = None, None, None
 
-    def get(self, belt_mask: Optional[np.ndarray], shape, edge: int) -> np.ndarray:
+    def get(self, belt_mask: np.ndarray | None, shape, edge: int) -> np.ndarray:
         """The eroded region for ``belt_mask`` (None: the whole image of ``shape``)."""
         key = (tuple(shape), int(edge))
         if self._inner is None or belt_mask is not self._mask or key != self._key:
             region = np.full(key[0], 255, np.uint8) if belt_mask is None else belt_mask
             kernel = np.ones((2 * edge + 1, 2 * edge + 1), np.uint8)
             self._inner = cv2.erode(region, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0)
-            self._mask, self._key = belt_mask, key   # holding the mask keeps its identity unique
+            self._mask, self._key = belt_mask, key  # holding the mask keeps its identity unique
         return self._inner
 
 
@@ -171,7 +193,7 @@ class PartDetector(abc.ABC):
 
     name = "detector"
 
-    def __init__(self, belt_mask: Optional[np.ndarray] = None):
+    def __init__(self, belt_mask: np.ndarray | None = None):
         self.belt_mask = belt_mask
         self._belt_inner = BeltInner()
 
@@ -200,9 +222,13 @@ class ClassicalDetector(PartDetector):
 
     name = "classical"
 
-    def __init__(self, belt_mask: Optional[np.ndarray] = None,
-                 to_plane: Optional[Callable[[np.ndarray], np.ndarray]] = None,
-                 mm_per_px: float = 1.0, params: Optional[dict] = None):
+    def __init__(
+        self,
+        belt_mask: np.ndarray | None = None,
+        to_plane: Callable[[np.ndarray], np.ndarray] | None = None,
+        mm_per_px: float = 1.0,
+        params: dict | None = None,
+    ):
         super().__init__(belt_mask)
         self.params = DETECTOR_SCHEMA.validate(params or {}, "detector")
         self.to_plane = to_plane or (lambda px: np.asarray(px, float) * mm_per_px / 1000.0)
@@ -263,19 +289,28 @@ class ClassicalDetector(PartDetector):
         # drawn when its centre is inside the part) times the pixel's area on the plane.
         outline = (self.to_plane(contour.reshape(-1, 2).astype(float)) * 1000.0).astype(np.float32)
         outline_area = abs(cv2.contourArea(outline))
-        hole_area = sum(abs(cv2.contourArea((self.to_plane(h.reshape(-1, 2).astype(float)) * 1000.0).astype(np.float32)))
-                        for h in holes)
+        hole_area = sum(
+            abs(cv2.contourArea((self.to_plane(h.reshape(-1, 2).astype(float)) * 1000.0).astype(np.float32)))
+            for h in holes
+        )
         pixel_mm, pixel_mm2, pixel_mm_max = self._pixel_size(centroid)
         hull = cv2.convexHull(outline)
         width_min, width_max = hull_widths(hull.reshape(-1, 2))
         polygon = cv2.approxPolyDP(hull, NUT_POLYGON_EPSILON_MM, True).reshape(-1, 2)
         # How far a width may be off: an edge per side, in mm at the blob (the pixel's longer side).
         tolerance = P["edge_tolerance_px"] * pixel_mm_max
-        features = {"area_mm2": count * pixel_mm2, "width_min_mm": width_min + pixel_mm,
-                    "width_max_mm": width_max + pixel_mm, "head_step_mm": head_step(outline),
-                    "hole_ratio": hole_area / max(outline_area, 1e-6),
-                    "vertices": len(polygon), "corner_min_deg": smallest_corner(polygon),
-                    "tolerance_mm": tolerance, "purity": purity, "colour": colour}
+        features = {
+            "area_mm2": count * pixel_mm2,
+            "width_min_mm": width_min + pixel_mm,
+            "width_max_mm": width_max + pixel_mm,
+            "head_step_mm": head_step(outline),
+            "hole_ratio": hole_area / max(outline_area, 1e-6),
+            "vertices": len(polygon),
+            "corner_min_deg": smallest_corner(polygon),
+            "tolerance_mm": tolerance,
+            "purity": purity,
+            "colour": colour,
+        }
         kinds = ("washer",) if features["hole_ratio"] >= P["hole_ratio_min"] else ("bolt", "nut")
         mismatches = []
         for kind in kinds:
@@ -293,7 +328,7 @@ class ClassicalDetector(PartDetector):
             confidence *= 1.0 if features["vertices"] == 6 else 0.8
         result.detections.append(Detection(part.name, centroid, angle, float(confidence), features))
 
-    def _misfit(self, part, features, tolerance) -> Tuple[str, float]:
+    def _misfit(self, part, features, tolerance) -> tuple[str, float]:
         """('', excess) if the blob's features fit ``part``'s envelope (module docstring, 5.),
         else (which measures fail, excess). ``excess``: the worst feature's distance beyond
         the parallax-only envelope, in units of its pixel tolerance (0: inside, <= 1: fits)."""
@@ -304,9 +339,9 @@ class ClassicalDetector(PartDetector):
             if name == "perimeter_mm":
                 continue
             low, high = bounds
-            if name == "area_mm2":   # a band along the outline, plus the relative tolerance
+            if name == "area_mm2":  # a band along the outline, plus the relative tolerance
                 slack = envelope["perimeter_mm"] * tolerance + P["area_tolerance"] * low
-            else:                    # a width, or the difference of two: one edge on each side
+            else:  # a width, or the difference of two: one edge on each side
                 slack = 2.0 * tolerance
             value = features[name]
             beyond = max(low - value, value - high, 0.0) / max(slack, 1e-9)
@@ -319,7 +354,7 @@ class ClassicalDetector(PartDetector):
             misfits.append(f"a {features['corner_min_deg']:.0f}° corner (hexagon: 120°)")
         return ", ".join(misfits), excess
 
-    def _pixel_size(self, pixel) -> Tuple[float, float, float]:
+    def _pixel_size(self, pixel) -> tuple[float, float, float]:
         """A pixel at ``pixel`` on the belt plane: (mean side mm, area mm², longer side mm)."""
         pixel = np.asarray(pixel, float)
         a, bx, by = self.to_plane(np.vstack([pixel, pixel + (1.0, 0.0), pixel + (0.0, 1.0)])) * 1000.0
@@ -338,7 +373,7 @@ class ClassicalDetector(PartDetector):
         return angle % (math.pi / 3)
 
 
-def hull_widths(hull: np.ndarray) -> Tuple[float, float]:
+def hull_widths(hull: np.ndarray) -> tuple[float, float]:
     """(narrowest, widest) width of a convex polygon (N x 2, in order): the narrowest is
     across one of its edges (rotating calipers), the widest its diameter."""
     hull = np.asarray(hull, float).reshape(-1, 2)
@@ -362,7 +397,8 @@ def smallest_corner(polygon: np.ndarray) -> float:
         return 180.0
     before, after = np.roll(polygon, 1, axis=0) - polygon, np.roll(polygon, -1, axis=0) - polygon
     cosine = (before * after).sum(axis=1) / np.maximum(
-        np.linalg.norm(before, axis=1) * np.linalg.norm(after, axis=1), 1e-12)
+        np.linalg.norm(before, axis=1) * np.linalg.norm(after, axis=1), 1e-12
+    )
     return float(np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0))).min())
 
 
@@ -390,7 +426,7 @@ def head_step(outline: np.ndarray, bins: int = 20) -> float:
         return 0.0
     if np.nanmax(profile[:end]) < np.nanmax(profile[-end:]):
         profile = profile[::-1]
-    middle = profile[int(0.4 * bins):int(0.9 * bins)]
+    middle = profile[int(0.4 * bins) : int(0.9 * bins)]
     if np.isnan(middle).all():
         return 0.0
     return float(np.nanmax(profile[:end]) - np.nanmedian(middle))
@@ -402,37 +438,52 @@ def shape_envelope(part, view_slope_max: float) -> dict:
     5.), before pixel tolerances: {feature: (low, high)} for "width_min_mm",
     "width_max_mm", "area_mm2" (and the bolt's "head_step_mm"), and "perimeter_mm" (the
     footprint's, for the area's pixel band). All from ``kitting.parts``'s dimensions."""
-    sweep = 1000.0 * part.height * view_slope_max          # mm, the top face's largest displacement
+    sweep = 1000.0 * part.height * view_slope_max  # mm, the top face's largest displacement
     area = 1e6 * part.footprint_area
     if part.kind == "nut":
-        across_flats = 1000.0 * part.width                  # 18 mm (ISO 4032 M12)
+        across_flats = 1000.0 * part.width  # 18 mm (ISO 4032 M12)
         across_corners = across_flats * 2.0 / math.sqrt(3)  # 20.8 mm: also the diameter
-        return {"width_min_mm": (across_flats, across_corners),
-                "width_max_mm": (across_corners, across_corners + sweep),
-                "area_mm2": (area, area + sweep * across_corners),
-                "perimeter_mm": 3.0 * across_corners}
+        return {
+            "width_min_mm": (across_flats, across_corners),
+            "width_max_mm": (across_corners, across_corners + sweep),
+            "area_mm2": (area, area + sweep * across_corners),
+            "perimeter_mm": 3.0 * across_corners,
+        }
     if part.kind == "washer":
-        diameter, bore = 1000.0 * part.width, 1000.0 * part.bore   # 20 / 10.5 mm (ISO 7089 M10)
+        diameter, bore = 1000.0 * part.width, 1000.0 * part.bore  # 20 / 10.5 mm (ISO 7089 M10)
         # The sweep also narrows the see-through bore (where the top and bottom openings overlap).
-        return {"width_min_mm": (diameter, diameter), "width_max_mm": (diameter, diameter + sweep),
-                "area_mm2": (area, area + sweep * (diameter + bore)),
-                "perimeter_mm": math.pi * (diameter + bore)}
-    head = 1000.0 * BOLT_HEAD[1]                            # 13 mm head across flats (ISO 4017 M8)
-    shaft = 1000.0 * BOLT_SHAFT[0]                          # 8 mm
-    length = 1000.0 * part.length                           # 45.3 mm head + shaft
-    diameter = math.hypot(length, (head + shaft) / 2.0)     # a head corner to the shaft end's far corner
+        return {
+            "width_min_mm": (diameter, diameter),
+            "width_max_mm": (diameter, diameter + sweep),
+            "area_mm2": (area, area + sweep * (diameter + bore)),
+            "perimeter_mm": math.pi * (diameter + bore),
+        }
+    head = 1000.0 * BOLT_HEAD[1]  # 13 mm head across flats (ISO 4017 M8)
+    shaft = 1000.0 * BOLT_SHAFT[0]  # 8 mm
+    length = 1000.0 * part.length  # 45.3 mm head + shaft
+    diameter = math.hypot(length, (head + shaft) / 2.0)  # a head corner to the shaft end's far corner
     # The head (13 mm high) sweeps further than the shaft's top (10.5 mm): the step can only grow.
     # Its upper end is left open: a head swept along the shaft widens the head end further.
-    return {"width_min_mm": (head, head + sweep), "width_max_mm": (diameter, diameter + sweep),
-            "area_mm2": (area, area + sweep * diameter), "head_step_mm": (head - shaft, math.inf),
-            "perimeter_mm": 2.0 * (length + head)}
+    return {
+        "width_min_mm": (head, head + sweep),
+        "width_max_mm": (diameter, diameter + sweep),
+        "area_mm2": (area, area + sweep * diameter),
+        "head_step_mm": (head - shaft, math.inf),
+        "perimeter_mm": 2.0 * (length + head),
+    }
 
 
 def belt_mask_for(camera, belt, shrink: float = 0.0) -> np.ndarray:
     """uint8 mask (255 = belt) of the belt's top surface in the camera image."""
     y0, y1 = belt.y - belt.width / 2 + shrink, belt.y + belt.width / 2 - shrink
-    corners = np.array([[belt.x_start, y0, belt.height], [belt.x_end, y0, belt.height],
-                        [belt.x_end, y1, belt.height], [belt.x_start, y1, belt.height]])
+    corners = np.array(
+        [
+            [belt.x_start, y0, belt.height],
+            [belt.x_end, y0, belt.height],
+            [belt.x_end, y1, belt.height],
+            [belt.x_start, y1, belt.height],
+        ]
+    )
     # Clip the long belt to the part in front of the camera before projecting.
     cx = camera.pose[0, 3]
     reach = 3.0 * camera.pose[2, 3]

@@ -9,7 +9,6 @@ constant metres-per-pixel, which holds only for a camera looking straight down a
 height with no distortion: with our ~10 degree tilt the scale changes across the image by
 several percent (tens of millimetres at the image edge), far beyond the 2 mm goal.
 """
-from typing import Tuple
 
 import numpy as np
 
@@ -42,8 +41,7 @@ def pixel_to_belt(camera: PinholeCamera, pixel, belt_height: float, above: float
     return np.array([point[0], point[1], belt_height])
 
 
-def image_angle_to_belt_yaw(camera: PinholeCamera, pixel, angle: float, height: float,
-                            step_px: float = 10.0) -> float:
+def image_angle_to_belt_yaw(camera: PinholeCamera, pixel, angle: float, height: float, step_px: float = 10.0) -> float:
     """Yaw (rad, base frame) of the belt-plane direction seen at ``pixel`` along the image
     direction ``angle`` (rad, image x towards image y)."""
     pixel = np.asarray(pixel, float)
@@ -57,7 +55,7 @@ def plane_to_pixel(camera: PinholeCamera, points) -> np.ndarray:
     return camera.project(points)
 
 
-def footprint_scale(camera: PinholeCamera, pixel, height: float) -> Tuple[float, float]:
+def footprint_scale(camera: PinholeCamera, pixel, height: float) -> tuple[float, float]:
     """Metres per pixel along image x and y at ``pixel`` on the plane z = height."""
     pixel = np.asarray(pixel, float)
     a, bx, by = pixels_to_plane(camera, np.vstack([pixel, pixel + (1, 0), pixel + (0, 1)]), height)

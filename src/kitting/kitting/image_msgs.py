@@ -19,8 +19,8 @@ the data is the rows of the image, ``step`` bytes each. No rospy either: the mes
 
 Stamps are seconds (float), a ``genpy.Time``/``rospy.Time``, or None (zero).
 """
+
 import math
-from typing import Optional, Tuple
 
 import genpy
 import numpy as np
@@ -45,7 +45,7 @@ def to_time(stamp) -> genpy.Time:
     return genpy.Time.from_sec(seconds)
 
 
-def _data_bytes(data) -> Tuple[Optional[np.ndarray], str]:
+def _data_bytes(data) -> tuple[np.ndarray | None, str]:
     if isinstance(data, (bytes, bytearray, memoryview)):
         return np.frombuffer(data, np.uint8), ""
     try:
@@ -59,7 +59,7 @@ def _data_bytes(data) -> Tuple[Optional[np.ndarray], str]:
     return array.astype(np.uint8), ""
 
 
-def image_to_array(msg) -> Tuple[Optional[np.ndarray], str]:
+def image_to_array(msg) -> tuple[np.ndarray | None, str]:
     """(H x W x C uint8 array in the message's own channel order, "") or (None, reason)."""
     encoding = msg.encoding
     channels = ENCODINGS.get(encoding)
@@ -80,7 +80,7 @@ def image_to_array(msg) -> Tuple[Optional[np.ndarray], str]:
     return array, ""
 
 
-def image_to_bgr(msg) -> Tuple[Optional[np.ndarray], str]:
+def image_to_bgr(msg) -> tuple[np.ndarray | None, str]:
     """(H x W x 3 uint8 BGR array, "") or (None, reason) from a bgr8/rgb8/mono8 Image."""
     array, why = image_to_array(msg)
     if array is None:
@@ -136,7 +136,7 @@ def camera_info_from_intrinsics(intrinsics, stamp=None, frame_id: str = "") -> C
     return msg
 
 
-def intrinsics_from_camera_info(msg) -> Tuple[Optional[Intrinsics], str]:
+def intrinsics_from_camera_info(msg) -> tuple[Intrinsics | None, str]:
     """(the camera's Intrinsics, "") or (None, reason): the checks of
     ``motion_common.camera_model.intrinsics_from_camera_info``, for callers that log and
     go on rather than stop."""

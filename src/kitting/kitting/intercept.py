@@ -9,9 +9,10 @@ is searched on a fine time grid and its first point refined by bisection. No pla
 with a reason: the part is not moving towards the window, has already left it, or leaves
 it before the arm can get there.
 """
+
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Optional, Union
 
 import numpy as np
 
@@ -20,15 +21,22 @@ import numpy as np
 class Intercept:
     ok: bool
     reason: str = ""
-    time: float = math.nan           # s, absolute
-    point: Optional[np.ndarray] = None   # (x, y) m, base frame
-    slack: float = math.nan          # s, time left in the window after the intercept
+    time: float = math.nan  # s, absolute
+    point: np.ndarray | None = None  # (x, y) m, base frame
+    slack: float = math.nan  # s, time left in the window after the intercept
 
 
-def plan_intercept(position, velocity, t0: float, now: float,
-                   reach_time: Union[float, Callable[[np.ndarray], float]],
-                   x_min: float, x_max: float, margin: float = 0.0,
-                   resolution: float = 0.01) -> Intercept:
+def plan_intercept(
+    position,
+    velocity,
+    t0: float,
+    now: float,
+    reach_time: float | Callable[[np.ndarray], float],
+    x_min: float,
+    x_max: float,
+    margin: float = 0.0,
+    resolution: float = 0.01,
+) -> Intercept:
     """Earliest feasible intercept of a part at ``position`` (x, y; m) at time ``t0`` moving
     at ``velocity`` (m/s), planned at time ``now`` (s)."""
     position, velocity = np.asarray(position, float), np.asarray(velocity, float)

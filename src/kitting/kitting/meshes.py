@@ -3,8 +3,8 @@
 (nut), a ring (washer) and a bolt lying on its side (head block + shaft block). Every face
 has its own vertices so each carries its face normal (the renderer shades per vertex).
 Lengths in metres; the mesh origin is the footprint's area centroid on the belt (z = 0)."""
+
 import math
-from typing import List, Tuple
 
 import numpy as np
 
@@ -15,9 +15,9 @@ class Mesh:
     """Triangles accumulated face by face."""
 
     def __init__(self):
-        self.vertices: List[Tuple[float, float, float]] = []
-        self.normals: List[Tuple[float, float, float]] = []
-        self.indices: List[int] = []
+        self.vertices: list[tuple[float, float, float]] = []
+        self.normals: list[tuple[float, float, float]] = []
+        self.indices: list[int] = []
 
     def face(self, points, normal):
         """A planar convex polygon (fan-triangulated), points counter-clockwise seen from ``normal``."""

@@ -53,10 +53,11 @@ Postprocessing:
 The box centre is not quite the footprint's area centroid for a bolt (the head is wider
 than the shaft: ~1.4 mm along the axis), which ``BeltVision`` takes as the part's position.
 """
+
 import ast
 import math
 import os
-from typing import Dict, List, Optional, Sequence, Tuple, Union
+from collections.abc import Sequence
 
 import cv2
 import numpy as np
@@ -72,7 +73,7 @@ class OnnxModelError(ValueError):
     """A model file the detector cannot use; the message says what to do."""
 
 
-def letterbox(image: np.ndarray, size: Tuple[int, int]) -> Tuple[np.ndarray, Tuple[float, float], Tuple[int, int]]:
+def letterbox(image: np.ndarray, size: tuple[int, int]) -> tuple[np.ndarray, tuple[float, float], tuple[int, int]]:
     """``image`` (h x w x 3) scaled to fit ``size`` = (H, W), centred and padded with grey.
 
     Returns (padded image, (sx, sy) scale of the resized image, (left, top) padding): an
@@ -87,19 +88,20 @@ def letterbox(image: np.ndarray, size: Tuple[int, int]) -> Tuple[np.ndarray, Tup
     top, bottom = int(round(dh - 0.1)), int(round(dh + 0.1))
     left, right = int(round(dw - 0.1)), int(round(dw + 0.1))
     if top or bottom or left or right:
-        image = cv2.copyMakeBorder(image, top, bottom, left, right, cv2.BORDER_CONSTANT,
-                                   value=(LETTERBOX_GREY,) * 3)
+        image = cv2.copyMakeBorder(image, top, bottom, left, right, cv2.BORDER_CONSTANT, value=(LETTERBOX_GREY,) * 3)
     return image, (new_w / w, new_h / h), (left, top)
 
 
-def _parse_names(value) -> Dict[int, str]:
+def _parse_names(value) -> dict[int, str]:
     """Class names from a list / tuple / dict or the metadata string ``"{0: 'a', 1: 'b'}"``."""
     if isinstance(value, str):
         try:
             value = ast.literal_eval(value)
         except (ValueError, SyntaxError) as error:
-            raise OnnxModelError(f"the model's 'names' metadata {value[:80]!r} is not a dict of class names "
-                                 f"({error}): pass class_names=[...] in the model's class order") from None
+            raise OnnxModelError(
+                f"the model's 'names' metadata {value[:80]!r} is not a dict of class names "
+                f"({error}): pass class_names=[...] in the model's class order"
+            ) from None
     if isinstance(value, dict):
         names = {int(k): str(v) for k, v in value.items()}
     elif isinstance(value, (list, tuple)):
@@ -111,7 +113,7 @@ def _parse_names(value) -> Dict[int, str]:
     return names
 
 
-def _size(value) -> Tuple[int, int]:
+def _size(value) -> tuple[int, int]:
     """(H, W) from an int, a pair, or the metadata string ``"[640, 640]"``."""
     try:
         if isinstance(value, str):
@@ -120,7 +122,9 @@ def _size(value) -> Tuple[int, int]:
             value = (value, value)
         height, width = (int(v) for v in value)
     except (ValueError, TypeError, SyntaxError):
-        raise OnnxModelError(f"input size {value!r} is not an int or (H, W): pass input_size=640 or (480, 640)") from None
+        raise OnnxModelError(
+            f"input size {value!r} is not an int or (H, W): pass input_size=640 or (480, 640)"
+        ) from None
     if height < 32 or width < 32 or height % 32 or width % 32:
         raise OnnxModelError(f"input size {height}x{width}: YOLOv8 needs multiples of 32 (imgsz)")
     return height, width
@@ -142,11 +146,20 @@ class OnnxDetector(PartDetector):
 
     name = "onnx"
 
-    def __init__(self, model_path: str, class_names: Optional[Union[Sequence[str], Dict[int, str]]] = None,
-                 input_size: Optional[Union[int, Tuple[int, int]]] = None, score_threshold: float = 0.5,
-                 nms_iou: float = 0.45, belt_mask: Optional[np.ndarray] = None, report_threshold: float = 0.25,
-                 edge_px: int = 2, max_detections: int = 100, threads: Optional[int] = None,
-                 task: Optional[str] = None):
+    def __init__(
+        self,
+        model_path: str,
+        class_names: Sequence[str] | dict[int, str] | None = None,
+        input_size: int | tuple[int, int] | None = None,
+        score_threshold: float = 0.5,
+        nms_iou: float = 0.45,
+        belt_mask: np.ndarray | None = None,
+        report_threshold: float = 0.25,
+        edge_px: int = 2,
+        max_detections: int = 100,
+        threads: int | None = None,
+        task: str | None = None,
+    ):
         if not 0.0 < score_threshold <= 1.0:
             raise ValueError(f"score_threshold {score_threshold} must be in (0, 1]")
         if not 0.0 < report_threshold <= score_threshold:
@@ -164,14 +177,18 @@ class OnnxDetector(PartDetector):
         self.input_name = model_input.name
         shape = list(model_input.shape)
         if len(shape) != 4 or (isinstance(shape[1], int) and shape[1] != 3):
-            raise OnnxModelError(f"{self.model_path}: input {model_input.name} has shape {shape}; expected "
-                                 f"1 x 3 x H x W (a YOLOv8 image model): re-export it, {README_HINT}")
+            raise OnnxModelError(
+                f"{self.model_path}: input {model_input.name} has shape {shape}; expected "
+                f"1 x 3 x H x W (a YOLOv8 image model): re-export it, {README_HINT}"
+            )
         static = tuple(shape[2:]) if all(isinstance(v, int) and v > 0 for v in shape[2:]) else None
         if input_size is not None:
             self.input_size = _size(input_size)
             if static and static != self.input_size:
-                raise OnnxModelError(f"{self.model_path}: input_size {self.input_size} but the model takes a fixed "
-                                     f"{static[0]}x{static[1]} input: drop input_size or re-export with that imgsz")
+                raise OnnxModelError(
+                    f"{self.model_path}: input_size {self.input_size} but the model takes a fixed "
+                    f"{static[0]}x{static[1]} input: drop input_size or re-export with that imgsz"
+                )
         elif "imgsz" in meta:
             self.input_size = _size(meta["imgsz"])
         elif static:
@@ -179,13 +196,17 @@ class OnnxDetector(PartDetector):
         else:
             self.input_size = (640, 640)
         if class_names is None and "names" not in meta:
-            raise OnnxModelError(f"{self.model_path} has no class names in its metadata (not an ultralytics "
-                                 f"export?): pass class_names=[...] in the model's class order")
+            raise OnnxModelError(
+                f"{self.model_path} has no class names in its metadata (not an ultralytics "
+                f"export?): pass class_names=[...] in the model's class order"
+            )
         self.class_names = _parse_names(meta["names"] if class_names is None else class_names)
         self.task = task or meta.get("task") or "detect"
         if self.task not in ("detect", "obb"):
-            raise OnnxModelError(f"{self.model_path} is a YOLOv8 '{self.task}' model; the detector runs 'detect' "
-                                 f"or 'obb' models: train one of those, {README_HINT}")
+            raise OnnxModelError(
+                f"{self.model_path} is a YOLOv8 '{self.task}' model; the detector runs 'detect' "
+                f"or 'obb' models: train one of those, {README_HINT}"
+            )
         output = self.session.get_outputs()[0]
         self.output_name = output.name
         self._layout_checked = False
@@ -194,13 +215,16 @@ class OnnxDetector(PartDetector):
 
     def _open(self, threads):
         if not os.path.isfile(self.model_path):
-            raise OnnxModelError(f"ONNX model {self.model_path} not found: train and export a YOLOv8 model "
-                                 f"({README_HINT}) and set onnx_model to its path, or use detector: classical")
+            raise OnnxModelError(
+                f"ONNX model {self.model_path} not found: train and export a YOLOv8 model "
+                f"({README_HINT}) and set onnx_model to its path, or use detector: classical"
+            )
         try:
             import onnxruntime
         except ImportError as error:
-            raise OnnxModelError(f"onnxruntime is not installed ({error}): run scripts/setup "
-                                 f"(it installs the pinned requirements.txt)") from None
+            raise OnnxModelError(
+                f"onnxruntime is not installed ({error}): run scripts/setup (it installs the pinned requirements.txt)"
+            ) from None
         options = onnxruntime.SessionOptions()
         options.log_severity_level = 3
         if threads:
@@ -208,9 +232,11 @@ class OnnxDetector(PartDetector):
         try:
             return onnxruntime.InferenceSession(self.model_path, options, providers=["CPUExecutionProvider"])
         except Exception as error:  # onnxruntime raises its own (pybind) types: InvalidProtobuf, Fail, ...
-            raise OnnxModelError(f"{self.model_path} is not a model onnxruntime can load "
-                                 f"({type(error).__name__}: {str(error)[:300]}): re-export it with "
-                                 f"`yolo export model=best.pt format=onnx opset=12` ({README_HINT})") from None
+            raise OnnxModelError(
+                f"{self.model_path} is not a model onnxruntime can load "
+                f"({type(error).__name__}: {str(error)[:300]}): re-export it with "
+                f"`yolo export model=best.pt format=onnx opset=12` ({README_HINT})"
+            ) from None
 
     def _check_layout(self, shape):
         """The output has 4 + nc rows (detect) or 4 + nc + 1 (obb)."""
@@ -221,11 +247,15 @@ class OnnxDetector(PartDetector):
             if self.task == "detect" and shape[1] == expected + 1:
                 hint = " (one row more: an OBB model without metadata? pass task='obb')"
             elif len(shape) == 3 and shape[2] in (expected, 6):
-                hint = (" (it looks transposed or end-to-end: export a YOLOv8 model without nms=True,"
-                        " whose output is 1 x (4 + nc) x anchors)")
-            raise OnnxModelError(f"{self.model_path}: output {list(shape)} does not fit a '{self.task}' model of "
-                                 f"{nc} classes {list(self.class_names.values())}: expected 1 x {expected} x N"
-                                 f"{hint}; pass the model's own class_names or re-export it, {README_HINT}")
+                hint = (
+                    " (it looks transposed or end-to-end: export a YOLOv8 model without nms=True,"
+                    " whose output is 1 x (4 + nc) x anchors)"
+                )
+            raise OnnxModelError(
+                f"{self.model_path}: output {list(shape)} does not fit a '{self.task}' model of "
+                f"{nc} classes {list(self.class_names.values())}: expected 1 x {expected} x N"
+                f"{hint}; pass the model's own class_names or re-export it, {README_HINT}"
+            )
         self._layout_checked = True
 
     # -- detection --------------------------------------------------------------------------
@@ -244,9 +274,9 @@ class OnnxDetector(PartDetector):
             raise OnnxModelError(f"{self.model_path}: output shape {output.shape}, expected 1 x (4 + nc) x N")
         if not self._layout_checked:
             self._check_layout(output.shape)
-        rows = output[0].T                                        # N x (4 + nc [+ 1])
+        rows = output[0].T  # N x (4 + nc [+ 1])
         nc = len(self.class_names)
-        scores_all = rows[:, 4:4 + nc]
+        scores_all = rows[:, 4 : 4 + nc]
         classes = scores_all.argmax(axis=1)
         scores = scores_all[np.arange(len(rows)), classes]
         keep = np.flatnonzero(scores >= self.report_threshold)
@@ -256,15 +286,25 @@ class OnnxDetector(PartDetector):
         boxes = rows[keep, :4].astype(float)
         angles = rows[keep, 4 + nc].astype(float) if self.task == "obb" else np.zeros(len(keep))
         chosen = self._nms(boxes, angles, scores[keep])
-        for i in chosen[:self.max_detections]:
-            self._judge(boxes[i], angles[i], int(classes[keep[i]]), float(scores[keep[i]]),
-                        (sx, sy), (left, top), (h, w), result)
+        for i in chosen[: self.max_detections]:
+            self._judge(
+                boxes[i],
+                angles[i],
+                int(classes[keep[i]]),
+                float(scores[keep[i]]),
+                (sx, sy),
+                (left, top),
+                (h, w),
+                result,
+            )
 
-    def _nms(self, boxes, angles, scores) -> List[int]:
+    def _nms(self, boxes, angles, scores) -> list[int]:
         score_list = [float(s) for s in scores]
         if self.task == "obb":
-            rects = [((float(cx), float(cy)), (float(bw), float(bh)), math.degrees(a))
-                     for (cx, cy, bw, bh), a in zip(boxes, angles)]
+            rects = [
+                ((float(cx), float(cy)), (float(bw), float(bh)), math.degrees(a))
+                for (cx, cy, bw, bh), a in zip(boxes, angles)
+            ]
             indices = cv2.dnn.NMSBoxesRotated(rects, score_list, self.report_threshold, self.nms_iou)
         else:
             rects = [(float(cx - bw / 2), float(cy - bh / 2), float(bw), float(bh)) for cx, cy, bw, bh in boxes]
@@ -291,35 +331,38 @@ class OnnxDetector(PartDetector):
         if place == "off belt":
             return
         if place == "edge":
-            result.rejections.append(Rejection("edge", pixel, f"{name} box {np.round(box_px, 1).tolist()} reaches "
-                                                              f"the image or belt border"))
+            result.rejections.append(
+                Rejection("edge", pixel, f"{name} box {np.round(box_px, 1).tolist()} reaches the image or belt border")
+            )
             return
         if name not in PART_CLASSES:
-            result.rejections.append(Rejection("unknown object", pixel,
-                                               f"model class {name!r} (score {score:.2f}) is not a kitting part"))
+            result.rejections.append(
+                Rejection("unknown object", pixel, f"model class {name!r} (score {score:.2f}) is not a kitting part")
+            )
             return
         if score < self.score_threshold:
-            result.rejections.append(Rejection("unknown object", pixel,
-                                               f"low score {score:.2f} < {self.score_threshold:.2f} (best: {name})"))
+            result.rejections.append(
+                Rejection("unknown object", pixel, f"low score {score:.2f} < {self.score_threshold:.2f} (best: {name})")
+            )
             return
         features = {"box": box_px, "class_id": class_id, "score": score, "detector": self.name}
         result.detections.append(Detection(name, pixel, self._angle(name, bw, bh, angle), score, features))
 
     def _placement(self, box, image_size) -> str:
-        """"ok", "edge" or "off belt" for a box (x0, y0, x1, y1) in image coordinates."""
+        """ "ok", "edge" or "off belt" for a box (x0, y0, x1, y1) in image coordinates."""
         h, w = image_size
         margin = self.edge_px
         c0, r0 = int(math.floor(box[0])), int(math.floor(box[1]))
-        c1, r1 = int(math.ceil(box[2])) - 1, int(math.ceil(box[3])) - 1   # last pixel indices covered
+        c1, r1 = int(math.ceil(box[2])) - 1, int(math.ceil(box[3])) - 1  # last pixel indices covered
         if self.belt_mask is not None:
-            region = self.belt_mask[max(r0, 0):min(r1, h - 1) + 1, max(c0, 0):min(c1, w - 1) + 1]
+            region = self.belt_mask[max(r0, 0) : min(r1, h - 1) + 1, max(c0, 0) : min(c1, w - 1) + 1]
             if region.size == 0 or not region.any():
                 return "off belt"
         if c0 < margin + 1 or r0 < margin + 1 or c1 > w - margin - 2 or r1 > h - margin - 2:
             return "edge"
         if self.belt_mask is not None:
             inner = self.belt_inner(self.belt_mask.shape, margin + 1)
-            if not inner[r0:r1 + 1, c0:c1 + 1].all():
+            if not inner[r0 : r1 + 1, c0 : c1 + 1].all():
                 return "edge"
         return "ok"
 

@@ -10,8 +10,8 @@ nut and the washer on a face. A part's pose (x, y, yaw) is the area centroid of 
 footprint on the belt; ``centroid_height`` is the height above the belt at which the
 silhouette's centroid is best intersected (about half the visible height).
 """
+
 from dataclasses import dataclass
-from typing import Dict, Tuple
 
 KINDS = ("bolt", "nut", "washer")
 COLOURS = ("yellow", "silver")
@@ -29,11 +29,11 @@ class PartClass:
 
     kind: str
     colour: str
-    thread: str            # "M8" ... "M12"
-    length: float          # m, footprint extent along the part's axis (bolt: head + shaft)
-    width: float           # m, footprint extent across (nut: across flats, washer: outside diameter)
-    height: float          # m, top above the belt
-    bore: float = 0.0      # m, washer hole diameter (0: none visible from above)
+    thread: str  # "M8" ... "M12"
+    length: float  # m, footprint extent along the part's axis (bolt: head + shaft)
+    width: float  # m, footprint extent across (nut: across flats, washer: outside diameter)
+    height: float  # m, top above the belt
+    bore: float = 0.0  # m, washer hole diameter (0: none visible from above)
     centroid_height: float = 0.0  # m, see module docstring
 
     @property
@@ -41,18 +41,19 @@ class PartClass:
         return f"{self.kind}_{self.colour}"
 
     @property
-    def rgba(self) -> Tuple[float, float, float, float]:
+    def rgba(self) -> tuple[float, float, float, float]:
         return RGBA[self.colour]
 
     @property
     def footprint_area(self) -> float:
         """m², area seen from above (the detector's size check)."""
         import math
+
         if self.kind == "bolt":
             return BOLT_HEAD[0] * BOLT_HEAD[1] + (self.length - BOLT_HEAD[0]) * BOLT_SHAFT[0]
         if self.kind == "nut":
-            return math.sqrt(3) / 2 * self.width ** 2
-        return math.pi / 4 * (self.width ** 2 - self.bore ** 2)
+            return math.sqrt(3) / 2 * self.width**2
+        return math.pi / 4 * (self.width**2 - self.bore**2)
 
 
 # Bolt M8x40: head (along axis, across) and shaft (diameter, shaft bottom above the belt).
@@ -62,17 +63,13 @@ BOLT_SHAFT = (0.008, 0.0025)
 
 def _make(kind: str, colour: str) -> PartClass:
     if kind == "bolt":
-        return PartClass(kind, colour, "M8", length=0.0453, width=0.013, height=0.013,
-                         centroid_height=0.0055)
+        return PartClass(kind, colour, "M8", length=0.0453, width=0.013, height=0.013, centroid_height=0.0055)
     if kind == "nut":
-        return PartClass(kind, colour, "M12", length=0.018, width=0.018, height=0.0108,
-                         centroid_height=0.0054)
-    return PartClass(kind, colour, "M10", length=0.020, width=0.020, height=0.002, bore=0.0105,
-                     centroid_height=0.001)
+        return PartClass(kind, colour, "M12", length=0.018, width=0.018, height=0.0108, centroid_height=0.0054)
+    return PartClass(kind, colour, "M10", length=0.020, width=0.020, height=0.002, bore=0.0105, centroid_height=0.001)
 
 
-PART_CLASSES: Dict[str, PartClass] = {
-    f"{kind}_{colour}": _make(kind, colour) for kind in KINDS for colour in COLOURS}
+PART_CLASSES: dict[str, PartClass] = {f"{kind}_{colour}": _make(kind, colour) for kind in KINDS for colour in COLOURS}
 CLASS_NAMES = tuple(PART_CLASSES)
 
 

@@ -23,13 +23,14 @@ STOP, the server's latched stop and refusals come back as exceptions with a resu
 the cycle ends with a ``failed`` event; a held part stays on the magnet; ``recover`` (after
 the latch is released) carries it to its slot.
 """
+
 import copy
 import math
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
@@ -40,30 +41,72 @@ from .intercept import plan_intercept
 from .parts import PART_CLASSES
 from .tracking import BeltTracker, Observation, Track
 
-PICKER_SCHEMA = ParamSchema([
-    Param("pick_window", [-0.45, -0.08], "m", "x range along the belt where parts are picked (inside the "
-          "camera's view, so a missed pick is seen)", length=2, low=-5.0, high=5.0),
-    Param("hover_height", 0.08, "m", "magnet face above a part's top before the descent", low=0.01, high=0.5),
-    Param("transit_height", 0.15, "m", "magnet face above the belt plane between belt and tray", low=0.02, high=1.0),
-    Param("place_height", 0.015, "m", "part bottom above the slot floor when released", low=0.0, high=0.2),
-    Param("grasp_gap", 0.002, "m", "magnet face above the part's top at the grasp point", low=-0.005, high=0.02),
-    Param("wait_position", [-0.20, 0.55, 0.35], "m", "where tool0 waits for parts", length=3, low=-3.0, high=3.0),
-    Param("descent_time", 0.7, "s", "first estimate of the descent move's duration (then measured)",
-          low=0.05, high=10.0),
-    Param("tool_speed", 0.35, "m/s", "average tool speed of the reach-time estimate", low=0.01, high=5.0),
-    Param("move_overhead", 0.6, "s", "fixed time per move of the reach-time estimate (accelerations, calls)",
-          low=0.0, high=10.0),
-    Param("plan_margin", 0.4, "s", "slack added to every intercept", low=0.0, high=10.0),
-    Param("min_confidence", 0.5, "", "detections below this confidence are never picked", low=0.0, high=1.0),
-    Param("min_hits", 3, "", "observations before a track is picked", low=1, high=100),
-    Param("max_attempts", 3, "", "picks tried per part while it is reachable", low=1, high=20),
-    Param("verify_time", 0.6, "s", "time after the lift in which a fresh sighting means a missed pick",
-          low=0.0, high=10.0),
-    Param("clearance", 0.004, "m", "smallest distance from the magnet to the belt or tray on any path",
-          low=0.0, high=0.2),
-    Param("tool_orientation", [1.0, 0.0, 0.0, 0.0], "", "tool0 quaternion (x, y, z, w) for picking: z down",
-          length=4, low=-1.0, high=1.0),
-])
+PICKER_SCHEMA = ParamSchema(
+    [
+        Param(
+            "pick_window",
+            [-0.45, -0.08],
+            "m",
+            "x range along the belt where parts are picked (inside the camera's view, so a missed pick is seen)",
+            length=2,
+            low=-5.0,
+            high=5.0,
+        ),
+        Param("hover_height", 0.08, "m", "magnet face above a part's top before the descent", low=0.01, high=0.5),
+        Param(
+            "transit_height", 0.15, "m", "magnet face above the belt plane between belt and tray", low=0.02, high=1.0
+        ),
+        Param("place_height", 0.015, "m", "part bottom above the slot floor when released", low=0.0, high=0.2),
+        Param("grasp_gap", 0.002, "m", "magnet face above the part's top at the grasp point", low=-0.005, high=0.02),
+        Param("wait_position", [-0.20, 0.55, 0.35], "m", "where tool0 waits for parts", length=3, low=-3.0, high=3.0),
+        Param(
+            "descent_time",
+            0.7,
+            "s",
+            "first estimate of the descent move's duration (then measured)",
+            low=0.05,
+            high=10.0,
+        ),
+        Param("tool_speed", 0.35, "m/s", "average tool speed of the reach-time estimate", low=0.01, high=5.0),
+        Param(
+            "move_overhead",
+            0.6,
+            "s",
+            "fixed time per move of the reach-time estimate (accelerations, calls)",
+            low=0.0,
+            high=10.0,
+        ),
+        Param("plan_margin", 0.4, "s", "slack added to every intercept", low=0.0, high=10.0),
+        Param("min_confidence", 0.5, "", "detections below this confidence are never picked", low=0.0, high=1.0),
+        Param("min_hits", 3, "", "observations before a track is picked", low=1, high=100),
+        Param("max_attempts", 3, "", "picks tried per part while it is reachable", low=1, high=20),
+        Param(
+            "verify_time",
+            0.6,
+            "s",
+            "time after the lift in which a fresh sighting means a missed pick",
+            low=0.0,
+            high=10.0,
+        ),
+        Param(
+            "clearance",
+            0.004,
+            "m",
+            "smallest distance from the magnet to the belt or tray on any path",
+            low=0.0,
+            high=0.2,
+        ),
+        Param(
+            "tool_orientation",
+            [1.0, 0.0, 0.0, 0.0],
+            "",
+            "tool0 quaternion (x, y, z, w) for picking: z down",
+            length=4,
+            low=-1.0,
+            high=1.0,
+        ),
+    ]
+)
 
 
 @dataclass
@@ -72,9 +115,9 @@ class KittingEvent:
 
     track_id: int
     class_name: str
-    event: str                 # tracked | planned | picked | missed | placed | skipped | failed
+    event: str  # tracked | planned | picked | missed | placed | skipped | failed
     reason: str = ""
-    position: Optional[np.ndarray] = None
+    position: np.ndarray | None = None
     time: float = 0.0
 
 
@@ -92,22 +135,29 @@ class Box:
         return float(np.linalg.norm(outside))
 
 
-def cell_obstacles(cell: Cell) -> List[Box]:
+def cell_obstacles(cell: Cell) -> list[Box]:
     """The belt body and the tray plate as boxes (the tray's yaw taken as its bounding box)."""
     belt = cell.belt
-    boxes = [Box("belt", np.array([belt.x_start, belt.y - belt.width / 2, belt.height - belt.thickness]),
-                 np.array([belt.x_end, belt.y + belt.width / 2, belt.height]))]
+    boxes = [
+        Box(
+            "belt",
+            np.array([belt.x_start, belt.y - belt.width / 2, belt.height - belt.thickness]),
+            np.array([belt.x_end, belt.y + belt.width / 2, belt.height]),
+        )
+    ]
     tray = cell.tray
     corners = np.array([[sx * tray.size[0] / 2, sy * tray.size[1] / 2] for sx in (-1, 1) for sy in (-1, 1)])
     c, s = math.cos(tray.yaw), math.sin(tray.yaw)
     corners = corners @ np.array([[c, s], [-s, c]]) + tray.position[:2]
-    boxes.append(Box("tray", np.r_[corners.min(axis=0), tray.position[2] - 0.01],
-                     np.r_[corners.max(axis=0), tray.position[2]]))
+    boxes.append(
+        Box("tray", np.r_[corners.min(axis=0), tray.position[2] - 0.01], np.r_[corners.max(axis=0), tray.position[2]])
+    )
     return boxes
 
 
-def check_segment(start, end, obstacles: List[Box], clearance: float, allowed_end: float = 0.0,
-                  step: float = 0.005) -> str:
+def check_segment(
+    start, end, obstacles: list[Box], clearance: float, allowed_end: float = 0.0, step: float = 0.005
+) -> str:
     """'' when the straight segment start->end of the magnet face keeps ``clearance`` from
     every obstacle; else what it hits. The last ``allowed_end`` metres may come closer
     (the descent onto a part lying on the belt)."""
@@ -148,9 +198,17 @@ class _PartRecord:
 class KittingPicker:
     """Tracks parts and runs kitting cycles with ``controller``."""
 
-    def __init__(self, cell: Cell, controller, params: Optional[dict] = None, tracker_params: Optional[dict] = None,
-                 clock: Callable[[], float] = time.time, sleep: Callable[[float], None] = time.sleep,
-                 on_event: Callable[[KittingEvent], None] = lambda event: None, source: str = "kitting parameters"):
+    def __init__(
+        self,
+        cell: Cell,
+        controller,
+        params: dict | None = None,
+        tracker_params: dict | None = None,
+        clock: Callable[[], float] = time.time,
+        sleep: Callable[[float], None] = time.sleep,
+        on_event: Callable[[KittingEvent], None] = lambda event: None,
+        source: str = "kitting parameters",
+    ):
         self.params = PICKER_SCHEMA.validate(params or {}, source)
         if self.params["pick_window"][1] <= self.params["pick_window"][0]:
             raise ValueError(f"{source}: pick_window must be [x_min, x_max] with x_min < x_max")
@@ -159,22 +217,25 @@ class KittingPicker:
         self.clock, self.sleep, self.on_event = clock, sleep, on_event
         self.obstacles = cell_obstacles(cell)
         self.descent_time = self.params["descent_time"]
-        self.records: Dict[int, _PartRecord] = {}
-        self.holding: Optional[Track] = None
+        self.records: dict[int, _PartRecord] = {}
+        self.holding: Track | None = None
         self.magnet_on = False
         self.orientation = list(self.params["tool_orientation"])
-        self.cycle_times: List[float] = []
+        self.cycle_times: list[float] = []
         # observe() runs on the image callback's thread, the cycle on its own: the lock
         # keeps a Kalman update from interleaving with a plan reading the same track.
         self.lock = threading.Lock()
-        self.recent = deque()          # (stamp, Observation) of the last 3 s: the miss check
-        self.last_image = -math.inf    # stamp of the newest processed image, parts or not
+        self.recent = deque()  # (stamp, Observation) of the last 3 s: the miss check
+        self.last_image = -math.inf  # stamp of the newest processed image, parts or not
 
     # -- perception --------------------------------------------------------------------------
     def observe(self, stamp: float, parts):
         """Feed one image's parts (objects with class_name, x, y, confidence) taken at ``stamp``."""
-        observations = [Observation(p.class_name, p.x, p.y, p.confidence) for p in parts
-                        if p.confidence >= self.params["min_confidence"] and p.class_name in PART_CLASSES]
+        observations = [
+            Observation(p.class_name, p.x, p.y, p.confidence)
+            for p in parts
+            if p.confidence >= self.params["min_confidence"] and p.class_name in PART_CLASSES
+        ]
         with self.lock:
             self.last_image = max(self.last_image, stamp)
             self.recent.extend((stamp, o) for o in observations)
@@ -187,7 +248,7 @@ class KittingPicker:
             self._emit(track, "tracked", position=np.r_[track.position, self.cell.belt.height])
 
     # -- geometry ----------------------------------------------------------------------------
-    def _tool0(self, face) -> List[float]:
+    def _tool0(self, face) -> list[float]:
         """tool0 position for a magnet face at ``face`` (the tool points down)."""
         return (np.asarray(face, float) + [0.0, 0.0, self.cell.gripper.tcp_length]).tolist()
 
@@ -206,16 +267,19 @@ class KittingPicker:
         return 2 * P["move_overhead"] + float(np.linalg.norm(hover - start)) / P["tool_speed"] + self.descent_time
 
     # -- the cycle ---------------------------------------------------------------------------
-    def candidates(self) -> List[Track]:
+    def candidates(self) -> list[Track]:
         """Confirmed tracks not done yet, nearest to leaving the pick window first."""
         with self.lock:
-            out = [copy.deepcopy(t) for t in self.tracker.tracks.values()
-                   if t.hits >= self.params["min_hits"] and not self.records.get(t.track_id, _PartRecord()).done]
+            out = [
+                copy.deepcopy(t)
+                for t in self.tracker.tracks.values()
+                if t.hits >= self.params["min_hits"] and not self.records.get(t.track_id, _PartRecord()).done
+            ]
         return sorted(out, key=lambda t: -t.position[0])
 
-    def run_once(self) -> Optional[KittingEvent]:
+    def run_once(self) -> KittingEvent | None:
         """Pick and place the next part if there is one; the final event, or None."""
-        candidates = self.candidates()   # the most downstream part first
+        candidates = self.candidates()  # the most downstream part first
         if not candidates:
             return None
         track = candidates[0]
@@ -223,9 +287,16 @@ class KittingPicker:
         now = self.clock()
         start = self._face_now()
         x_min, x_max = self.params["pick_window"]
-        plan = plan_intercept(track.position, track.velocity, track.t, now,
-                              lambda point: self.reach_time(start, point), x_min, x_max,
-                              margin=self.params["plan_margin"])
+        plan = plan_intercept(
+            track.position,
+            track.velocity,
+            track.t,
+            now,
+            lambda point: self.reach_time(start, point),
+            x_min,
+            x_max,
+            margin=self.params["plan_margin"],
+        )
         if not plan.ok:
             record.done = True
             return self._emit(track, "skipped", plan.reason)
@@ -239,8 +310,11 @@ class KittingPicker:
                 # and the part is carried to its slot once the stop is released.
                 self.holding = track
                 record.done = True
-                return self._emit(track, "failed", f"{exc.reason}; the magnet stays on: the part goes to "
-                                                   "its slot once the stop is released")
+                return self._emit(
+                    track,
+                    "failed",
+                    f"{exc.reason}; the magnet stays on: the part goes to its slot once the stop is released",
+                )
             if self.holding is None and not isinstance(exc, PickMissed):
                 # Nothing held; after a suspected miss the magnet stays on instead (if
                 # the part is held after all, it is never dropped onto the belt).
@@ -313,7 +387,7 @@ class KittingPicker:
         if P["verify_time"] > 0:
             self.sleep(P["verify_time"])
             if not self._image_since(lifted_at):
-                self.sleep(P["verify_time"])      # one more window: the vision may lag behind
+                self.sleep(P["verify_time"])  # one more window: the vision may lag behind
             if not self._image_since(lifted_at):
                 # Without an image the miss check cannot run: carry on (the part is most
                 # likely on the magnet) but say so, so that a campaign counts it apart.
@@ -335,8 +409,7 @@ class KittingPicker:
         sighting within ``radius`` of the belt prediction means the grasp missed."""
         with self.lock:
             recent = [(t, o) for t, o in self.recent if t > since and o.class_name == class_name]
-        return any(math.hypot(o.x - p[0], o.y - p[1]) < radius
-                   for t, o in recent for p in [track.predict_position(t)])
+        return any(math.hypot(o.x - p[0], o.y - p[1]) < radius for t, o in recent for p in [track.predict_position(t)])
 
     def place_held(self) -> KittingEvent:
         """Carry the held part to its class's slot and release it there."""
@@ -375,7 +448,13 @@ class KittingPicker:
             del self.records[track_id]
 
     def _emit(self, track: Track, event: str, reason: str = "", position=None) -> KittingEvent:
-        item = KittingEvent(track.track_id, track.class_name, event, reason,
-                            None if position is None else np.asarray(position, float), self.clock())
+        item = KittingEvent(
+            track.track_id,
+            track.class_name,
+            event,
+            reason,
+            None if position is None else np.asarray(position, float),
+            self.clock(),
+        )
         self.on_event(item)
         return item

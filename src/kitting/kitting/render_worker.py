@@ -6,23 +6,26 @@ client with the cell built in it (``SimScene``). Each request sends the part pos
 (``SimScene.part_poses()``) and an optional camera pose; the worker mirrors them, renders
 and sends back the RGB image with the stamp it was asked for (the image shows the scene
 at that stamp)."""
+
 import os
 import subprocess
 import sys
 import tempfile
 import threading
 from multiprocessing.connection import Client, Listener
-from typing import Optional
 
 import numpy as np
 
 
 def _serve(connection, cell_path, width, height, supersample):
     import pybullet as p
+
     from motion_common.camera_model import PinholeCamera
+
     from .camera import render
     from .cell import load_cell
     from .sim_scene import SimScene
+
     client = p.connect(p.DIRECT)
     cell = load_cell(cell_path) if cell_path else load_cell()
     scene = SimScene(client, cell)
@@ -34,7 +37,7 @@ def _serve(connection, cell_path, width, height, supersample):
         try:
             message = connection.recv()
         except EOFError:
-            break          # the parent is gone
+            break  # the parent is gone
         if message is None:
             break
         stamp, poses, camera_pose, lighting = message
@@ -48,6 +51,7 @@ def main(argv=None):
     """Entry of the render process: ``python -m kitting.render_worker ADDRESS CELL W H S``
     (the authentication key comes on stdin)."""
     import signal
+
     # Ctrl-C reaches the whole process group; the parent ends this process itself.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     address, cell_path, width, height, supersample = (argv or sys.argv)[1:6]
@@ -59,8 +63,14 @@ def main(argv=None):
 class RenderWorker:
     """``with RenderWorker() as worker: image, stamp = worker.render(stamp, poses)``."""
 
-    def __init__(self, cell_path: Optional[str] = None, width: Optional[int] = None,
-                 height: Optional[int] = None, supersample: int = 1, timeout: float = 30.0):
+    def __init__(
+        self,
+        cell_path: str | None = None,
+        width: int | None = None,
+        height: int | None = None,
+        supersample: int = 1,
+        timeout: float = 30.0,
+    ):
         # A fresh interpreter running this module (not multiprocessing's spawn, which
         # re-imports the caller's main script: a ROS node's relay script breaks that),
         # connected over a private Unix socket.
@@ -69,8 +79,19 @@ class RenderWorker:
         key = os.urandom(16).hex().encode()
         self._listener = Listener(address, family="AF_UNIX", authkey=key)
         self._process = subprocess.Popen(
-            [sys.executable, "-m", "kitting.render_worker", address, cell_path or "", str(width or 0),
-             str(height or 0), str(int(supersample))], stdin=subprocess.PIPE, stdout=subprocess.DEVNULL)
+            [
+                sys.executable,
+                "-m",
+                "kitting.render_worker",
+                address,
+                cell_path or "",
+                str(width or 0),
+                str(height or 0),
+                str(int(supersample)),
+            ],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.DEVNULL,
+        )
         self._process.stdin.write(key + b"\n")
         self._process.stdin.close()
         self._connection = None
@@ -79,9 +100,11 @@ class RenderWorker:
         waiter.start()
         waiter.join(timeout)
         if not accepted:
-            self.close()     # closing the listener ends the waiting accept()
-            raise RuntimeError(f"render worker did not connect within {timeout:.0f} s (exit code "
-                               f"{self._process.poll()}); run 'python -m kitting.render_worker' by hand to see why")
+            self.close()  # closing the listener ends the waiting accept()
+            raise RuntimeError(
+                f"render worker did not connect within {timeout:.0f} s (exit code "
+                f"{self._process.poll()}); run 'python -m kitting.render_worker' by hand to see why"
+            )
         self._connection = accepted[0]
         if not self._connection.poll(timeout):
             self.close()
@@ -92,8 +115,7 @@ class RenderWorker:
         """Ask for an image (non-blocking) of the parts at ``poses`` seen from
         ``camera_pose`` (4x4; None: the cell YAML's) under ``lighting`` (a
         kitting.camera.Lighting; None: the default); collect it with ``result``."""
-        self._connection.send((stamp, list(poses), None if camera_pose is None else np.asarray(camera_pose),
-                               lighting))
+        self._connection.send((stamp, list(poses), None if camera_pose is None else np.asarray(camera_pose), lighting))
 
     def result(self, timeout: float = 10.0):
         """(image, stamp) of the oldest request."""

@@ -8,9 +8,10 @@ observation and stops tracks missed ``max_misses`` times in a row or gone past t
 end. A track is confirmed after ``min_hits`` hits; its class is the majority of its
 observations' classes.
 """
+
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 from filterpy.common import Q_discrete_white_noise
@@ -19,16 +20,18 @@ from scipy.linalg import block_diag
 
 from motion_common.params import Param, ParamSchema
 
-TRACKER_SCHEMA = ParamSchema([
-    Param("gate", 0.02, "m", "association distance", low=0.0, high=1.0, low_open=True),
-    Param("measurement_std", 0.001, "m", "position measurement noise", low=0.0, high=0.1, low_open=True),
-    Param("accel_std", 0.005, "m/s²", "process noise (white acceleration)", low=0.0, high=10.0, low_open=True),
-    Param("initial_speed", 0.05, "m/s", "prior belt speed along +x for a new track", low=-1.0, high=1.0),
-    Param("initial_speed_std", 0.05, "m/s", "prior speed uncertainty", low=0.0, high=1.0, low_open=True),
-    Param("min_hits", 2, "", "hits to confirm a track", low=1, high=100),
-    Param("max_misses", 3, "", "consecutive misses that stop a track", low=1, high=100),
-    Param("x_end", 0.80, "m", "tracks past this x are stopped (belt end)", low=-5.0, high=5.0),
-])
+TRACKER_SCHEMA = ParamSchema(
+    [
+        Param("gate", 0.02, "m", "association distance", low=0.0, high=1.0, low_open=True),
+        Param("measurement_std", 0.001, "m", "position measurement noise", low=0.0, high=0.1, low_open=True),
+        Param("accel_std", 0.005, "m/s²", "process noise (white acceleration)", low=0.0, high=10.0, low_open=True),
+        Param("initial_speed", 0.05, "m/s", "prior belt speed along +x for a new track", low=-1.0, high=1.0),
+        Param("initial_speed_std", 0.05, "m/s", "prior speed uncertainty", low=0.0, high=1.0, low_open=True),
+        Param("min_hits", 2, "", "hits to confirm a track", low=1, high=100),
+        Param("max_misses", 3, "", "consecutive misses that stop a track", low=1, high=100),
+        Param("x_end", 0.80, "m", "tracks past this x are stopped (belt end)", low=-5.0, high=5.0),
+    ]
+)
 
 
 @dataclass
@@ -43,7 +46,7 @@ class Observation:
 class Track:
     track_id: int
     kf: KalmanFilter
-    t: float                                      # s, time of the state
+    t: float  # s, time of the state
     hits: int = 1
     misses: int = 0
     classes: Counter = field(default_factory=Counter)
@@ -71,10 +74,10 @@ class Track:
 
 
 class BeltTracker:
-    def __init__(self, params: Optional[dict] = None):
+    def __init__(self, params: dict | None = None):
         self.params = TRACKER_SCHEMA.validate(params or {}, "tracker")
-        self.tracks: Dict[int, Track] = {}
-        self.stopped: List[Track] = []
+        self.tracks: dict[int, Track] = {}
+        self.stopped: list[Track] = []
         self._next_id = 1
 
     def _new_filter(self, observation: Observation) -> KalmanFilter:
@@ -83,8 +86,14 @@ class BeltTracker:
         kf.x = np.array([[observation.x], [P["initial_speed"]], [observation.y], [0.0]])
         kf.H = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]])
         kf.R = np.eye(2) * P["measurement_std"] ** 2
-        kf.P = np.diag([P["measurement_std"] ** 2, P["initial_speed_std"] ** 2,
-                        P["measurement_std"] ** 2, P["initial_speed_std"] ** 2])
+        kf.P = np.diag(
+            [
+                P["measurement_std"] ** 2,
+                P["initial_speed_std"] ** 2,
+                P["measurement_std"] ** 2,
+                P["initial_speed_std"] ** 2,
+            ]
+        )
         return kf
 
     def _predict(self, track: Track, t: float):
@@ -98,7 +107,7 @@ class BeltTracker:
         track.kf.predict()
         track.t = t
 
-    def update(self, t: float, observations: Sequence[Observation]) -> List[Track]:
+    def update(self, t: float, observations: Sequence[Observation]) -> list[Track]:
         """Advance to time t (s) with this frame's observations; returns the live tracks."""
         P = self.params
         for track in self.tracks.values():
@@ -134,5 +143,5 @@ class BeltTracker:
                 self._next_id += 1
         return list(self.tracks.values())
 
-    def confirmed(self) -> List[Track]:
+    def confirmed(self) -> list[Track]:
         return [track for track in self.tracks.values() if track.confirmed]

@@ -1,7 +1,7 @@
 """From pixels to parts on the belt: the detector's output turned into belt-plane poses in
 the robot base frame with the calibrated camera (``kitting.geometry``)."""
+
 from dataclasses import dataclass
-from typing import Optional
 
 from motion_common.camera_model import PinholeCamera
 
@@ -14,9 +14,9 @@ from .parts import PART_CLASSES
 @dataclass
 class PartObservation:
     class_name: str
-    x: float                 # m, base frame, on the belt plane
+    x: float  # m, base frame, on the belt plane
     y: float
-    yaw: float               # rad (bolt: axis mod pi; nut: mod pi/3; washer: 0)
+    yaw: float  # rad (bolt: axis mod pi; nut: mod pi/3; washer: 0)
     confidence: float
     pixel: tuple
 
@@ -24,22 +24,26 @@ class PartObservation:
 class BeltVision:
     """Detector + geometry for one calibrated camera over the belt."""
 
-    def __init__(self, camera: PinholeCamera, belt: Belt, detector=None, detector_params: Optional[dict] = None):
+    def __init__(self, camera: PinholeCamera, belt: Belt, detector=None, detector_params: dict | None = None):
         self.camera, self.belt = camera, belt
         if detector is None:
             mask = belt_mask_for(camera, belt)
             detector = ClassicalDetector(
-                belt_mask=mask, params=detector_params,
-                to_plane=lambda px: pixels_to_plane(camera, px, belt.height)[:, :2])
+                belt_mask=mask,
+                params=detector_params,
+                to_plane=lambda px: pixels_to_plane(camera, px, belt.height)[:, :2],
+            )
         self.detector = detector
 
     def locate(self, detection: Detection) -> PartObservation:
         part = PART_CLASSES[detection.class_name]
         x, y, _ = pixel_to_belt(self.camera, detection.pixel, self.belt.height, part.centroid_height)
-        yaw = image_angle_to_belt_yaw(self.camera, detection.pixel, detection.angle,
-                                      self.belt.height + part.centroid_height)
-        return PartObservation(detection.class_name, float(x), float(y), yaw, detection.confidence,
-                               tuple(detection.pixel))
+        yaw = image_angle_to_belt_yaw(
+            self.camera, detection.pixel, detection.angle, self.belt.height + part.centroid_height
+        )
+        return PartObservation(
+            detection.class_name, float(x), float(y), yaw, detection.confidence, tuple(detection.pixel)
+        )
 
     def observe(self, image):
         """(observations, DetectionResult) of one image."""

@@ -13,10 +13,10 @@
 
 Every rejected image or object is counted by reason (``counts``) and kept in the result.
 """
+
 import math
 from collections import Counter, deque
 from dataclasses import dataclass, field
-from typing import List, Optional
 
 import cv2
 import numpy as np
@@ -31,17 +31,26 @@ from .detector import ClassicalDetector, DetectionResult, Rejection, belt_mask_f
 from .geometry import pixels_to_plane
 from .vision import BeltVision, PartObservation
 
-VISION_SCHEMA = ParamSchema([
-    Param("detector", "classical", "", "part detector", choices=("classical", "onnx")),
-    Param("onnx_model", "", "", "ONNX model file (detector: onnx)"),
-    Param("registration_window", 10, "images", "registrations averaged for the camera pose", low=1, high=1000),
-    Param("registration_max_age", 5.0, "s", "how long a registration serves frames whose markers are hidden",
-          low=0.0, high=3600.0),
-    Param("moved_mm", 3.0, "mm", "registration change that means the camera moved", low=0.1, high=1000.0),
-    Param("moved_deg", 0.5, "deg", "rotation change that means the camera moved", low=0.01, high=180.0),
-    Param("max_reprojection_px", 2.0, "px", "largest marker reprojection error accepted", low=0.01, high=100.0),
-    Param("belt_edge_margin", 0.0, "m", "strip along the belt's edges treated as 'edge'", low=0.0, high=0.2),
-], ignore=("detector_params",))
+VISION_SCHEMA = ParamSchema(
+    [
+        Param("detector", "classical", "", "part detector", choices=("classical", "onnx")),
+        Param("onnx_model", "", "", "ONNX model file (detector: onnx)"),
+        Param("registration_window", 10, "images", "registrations averaged for the camera pose", low=1, high=1000),
+        Param(
+            "registration_max_age",
+            5.0,
+            "s",
+            "how long a registration serves frames whose markers are hidden",
+            low=0.0,
+            high=3600.0,
+        ),
+        Param("moved_mm", 3.0, "mm", "registration change that means the camera moved", low=0.1, high=1000.0),
+        Param("moved_deg", 0.5, "deg", "rotation change that means the camera moved", low=0.01, high=180.0),
+        Param("max_reprojection_px", 2.0, "px", "largest marker reprojection error accepted", low=0.01, high=100.0),
+        Param("belt_edge_margin", 0.0, "m", "strip along the belt's edges treated as 'edge'", low=0.0, high=0.2),
+    ],
+    ignore=("detector_params",),
+)
 
 
 @dataclass
@@ -50,41 +59,54 @@ class VisionResult:
 
     ok: bool
     reason: str = ""
-    parts: List[PartObservation] = field(default_factory=list)
-    rejections: List[Rejection] = field(default_factory=list)
-    camera_pose: Optional[np.ndarray] = None
+    parts: list[PartObservation] = field(default_factory=list)
+    rejections: list[Rejection] = field(default_factory=list)
+    camera_pose: np.ndarray | None = None
 
 
 class VisionPipeline:
     """Registration + detection + geometry for one camera (intrinsics ``K``, ``distortion``,
     image size) over the cell's belt."""
 
-    def __init__(self, cell: Cell, K, distortion, width: int, height: int, params: Optional[dict] = None,
-                 detector_params: Optional[dict] = None, source: str = "vision parameters"):
+    def __init__(
+        self,
+        cell: Cell,
+        K,
+        distortion,
+        width: int,
+        height: int,
+        params: dict | None = None,
+        detector_params: dict | None = None,
+        source: str = "vision parameters",
+    ):
         self.params = VISION_SCHEMA.validate(params or {}, source)
         self.cell = cell
         self.camera = PinholeCamera(int(width), int(height), np.asarray(K, float), np.asarray(distortion, float))
         # The detector and BeltVision are built once; a new registration only gives them
         # the camera pose and the belt mask it implies (_set_pose).
         if self.params["detector"] == "onnx":
-            from .onnx_detector import OnnxDetector   # onnxruntime only when asked for
+            from .onnx_detector import OnnxDetector  # onnxruntime only when asked for
+
             if not self.params["onnx_model"]:
                 raise ValueError(f"{source}: detector is 'onnx' but onnx_model is empty: give the model's path")
             detector = OnnxDetector(self.params["onnx_model"])
         else:
-            detector = ClassicalDetector(params=detector_params, to_plane=lambda px: pixels_to_plane(
-                self._vision.camera, px, cell.belt.height)[:, :2])
+            detector = ClassicalDetector(
+                params=detector_params,
+                to_plane=lambda px: pixels_to_plane(self._vision.camera, px, cell.belt.height)[:, :2],
+            )
         self._vision = BeltVision(self.camera, cell.belt, detector=detector)
         self._registrations = deque(maxlen=self.params["registration_window"])
-        self.registration_time: Optional[float] = None
-        self.camera_pose: Optional[np.ndarray] = None
+        self.registration_time: float | None = None
+        self.camera_pose: np.ndarray | None = None
         self.counts = Counter()
 
     # -- registration ------------------------------------------------------------------------
     def _register(self, image, stamp: float) -> str:
         """Update the camera pose from the markers; '' or why this image gave none."""
-        found = extrinsics_from_marker(image, self.cell.markers, self.camera.K, self.camera.distortion,
-                                       require_all=True)
+        found = extrinsics_from_marker(
+            image, self.cell.markers, self.camera.K, self.camera.distortion, require_all=True
+        )
         if not found.ok:
             return "marker partly hidden" if found.partly_hidden else "no marker"
         if found.reprojection_px > self.params["max_reprojection_px"]:
@@ -93,8 +115,9 @@ class VisionPipeline:
         if self._registrations:
             mean = self._mean_pose()
             moved_mm = 1000.0 * np.linalg.norm(pose[:3, 3] - mean[:3, 3])
-            moved_deg = math.degrees((Rotation.from_matrix(mean[:3, :3]).inv()
-                                      * Rotation.from_matrix(pose[:3, :3])).magnitude())
+            moved_deg = math.degrees(
+                (Rotation.from_matrix(mean[:3, :3]).inv() * Rotation.from_matrix(pose[:3, :3])).magnitude()
+            )
             if moved_mm > self.params["moved_mm"] or moved_deg > self.params["moved_deg"]:
                 self.counts["camera moved: re-registered"] += 1
                 self._registrations.clear()
@@ -121,8 +144,10 @@ class VisionPipeline:
         """Parts in one RGB image taken at ``stamp`` (s)."""
         problem = check_image(image_rgb)
         if not problem and image_rgb.shape[:2] != (self.camera.height, self.camera.width):
-            problem = (f"image is {image_rgb.shape[1]}x{image_rgb.shape[0]}, the camera info says "
-                       f"{self.camera.width}x{self.camera.height}")
+            problem = (
+                f"image is {image_rgb.shape[1]}x{image_rgb.shape[0]}, the camera info says "
+                f"{self.camera.width}x{self.camera.height}"
+            )
         if problem:
             self.counts["corrupt image"] += 1
             return VisionResult(False, f"corrupt image: {problem}")
@@ -132,8 +157,11 @@ class VisionPipeline:
             age = math.inf if self.registration_time is None else stamp - self.registration_time
             if age > self.params["registration_max_age"]:
                 self.counts["no registration: parts not published"] += 1
-                return VisionResult(False, f"{why}; no camera registration younger than "
-                                           f"{self.params['registration_max_age']:g} s: check the markers are visible")
+                return VisionResult(
+                    False,
+                    f"{why}; no camera registration younger than "
+                    f"{self.params['registration_max_age']:g} s: check the markers are visible",
+                )
         observations, detected = self._vision.observe(image_rgb)
         detected: DetectionResult
         for rejection in detected.rejections:

@@ -21,9 +21,9 @@ joints each waypoint will be reached with). It refuses:
 Not checked: self-collision, a part carried by the gripper, and the controller's own
 MoveL path on a real UR (it interpolates itself, close to the line checked here).
 """
+
 import math
 from dataclasses import dataclass, field
-from typing import List, Optional
 
 import numpy as np
 import pybullet
@@ -34,33 +34,45 @@ from motion_common.errors import ParameterError, RobotModelError
 from motion_common.kinematics import RobotKinematics, pose_to_se3, slerp
 from motion_common.params import Param, ParamSchema, read_yaml_file
 
-CHECK_SCHEMA = ParamSchema([
-    Param("fence_min", [-1.0, -1.0, 0.01], "m", "workspace fence, lower corner of the tool position", length=3),
-    Param("fence_max", [1.0, 1.0, 1.2], "m", "workspace fence, upper corner", length=3),
-    Param("collision_margin", 0.005, "m", "a link closer than this to a static scene body collides",
-          low=0.0, high=0.2),
-    Param("sample_step", 0.01, "m", "MoveL segments are checked every this much tool travel", low=0.001,
-          high=0.2),
-    Param("sample_angle", 0.05, "rad", "... and every this much tool rotation", low=0.001, high=1.0),
-    Param("joint_step", 0.05, "rad", "the MoveJ to the first waypoint is checked every this much joint travel",
-          low=0.001, high=1.0),
-    Param("ik_position_tolerance", 0.001, "m", "IK residual accepted as reachable", low=0.0, high=0.05,
-          low_open=True),
-    Param("ik_rotation_tolerance", 0.01, "rad", "IK residual accepted as reachable", low=0.0, high=0.5,
-          low_open=True),
-], ignore=("config_file",))
+CHECK_SCHEMA = ParamSchema(
+    [
+        Param("fence_min", [-1.0, -1.0, 0.01], "m", "workspace fence, lower corner of the tool position", length=3),
+        Param("fence_max", [1.0, 1.0, 1.2], "m", "workspace fence, upper corner", length=3),
+        Param(
+            "collision_margin", 0.005, "m", "a link closer than this to a static scene body collides", low=0.0, high=0.2
+        ),
+        Param("sample_step", 0.01, "m", "MoveL segments are checked every this much tool travel", low=0.001, high=0.2),
+        Param("sample_angle", 0.05, "rad", "... and every this much tool rotation", low=0.001, high=1.0),
+        Param(
+            "joint_step",
+            0.05,
+            "rad",
+            "the MoveJ to the first waypoint is checked every this much joint travel",
+            low=0.001,
+            high=1.0,
+        ),
+        Param(
+            "ik_position_tolerance", 0.001, "m", "IK residual accepted as reachable", low=0.0, high=0.05, low_open=True
+        ),
+        Param(
+            "ik_rotation_tolerance", 0.01, "rad", "IK residual accepted as reachable", low=0.0, high=0.5, low_open=True
+        ),
+    ],
+    ignore=("config_file",),
+)
 
 #: Largest joint change (rad) between two samples 1 cm apart on a MoveL: more means the
 #: line passes a singularity or flips the arm's configuration.
 MAX_SAMPLE_JUMP = 0.5
 
 
-def check_params(values: Optional[dict], source: str) -> dict:
+def check_params(values: dict | None, source: str) -> dict:
     """Checked checker parameters; ParameterError names ``source`` and the key."""
     params = CHECK_SCHEMA.validate(values, source)
     if any(lo >= hi for lo, hi in zip(params["fence_min"], params["fence_max"])):
-        raise ParameterError(f"{source}: fence_min {params['fence_min']} must be below fence_max "
-                             f"{params['fence_max']} on every axis")
+        raise ParameterError(
+            f"{source}: fence_min {params['fence_min']} must be below fence_max {params['fence_max']} on every axis"
+        )
     return params
 
 
@@ -74,8 +86,10 @@ def load_scene_file(path: str) -> list:
     data = read_yaml_file(path)
     spec = data.get("scene") if isinstance(data, dict) else data
     if not isinstance(spec, list) or not all(isinstance(entry, dict) for entry in spec):
-        raise ParameterError(f"{path}: a scene file holds 'scene:' with a list of bodies (see "
-                             "hw_interface/config/scenes/table_parts.yaml)")
+        raise ParameterError(
+            f"{path}: a scene file holds 'scene:' with a list of bodies (see "
+            "hw_interface/config/scenes/table_parts.yaml)"
+        )
     return spec
 
 
@@ -83,7 +97,7 @@ def load_scene_file(path: str) -> list:
 class Issue:
     """One reason to refuse: the waypoint (index, name; None for the program) and why."""
 
-    index: Optional[int]
+    index: int | None
     name: str
     reason: str
 
@@ -96,8 +110,8 @@ class CheckReport:
     """The outcome of a check: refused when ``issues`` is not empty."""
 
     robot: str
-    issues: List[Issue] = field(default_factory=list)
-    joints: List[list] = field(default_factory=list)   # per waypoint, the IK solution (rad)
+    issues: list[Issue] = field(default_factory=list)
+    joints: list[list] = field(default_factory=list)  # per waypoint, the IK solution (rad)
     samples: int = 0
     start_checked: bool = False
 
@@ -115,7 +129,7 @@ class CheckReport:
 class ProgramChecker:
     """Checks programs for one robot (URDF) in one scene; see the module doc."""
 
-    def __init__(self, urdf_path: str, robot_name: str, scene: Optional[list] = None, params: Optional[dict] = None):
+    def __init__(self, urdf_path: str, robot_name: str, scene: list | None = None, params: dict | None = None):
         self.urdf_path = urdf_path
         self.robot_name = robot_name
         self.params = check_params(params, "program check parameters")
@@ -141,8 +155,11 @@ class ProgramChecker:
             if info[2] == pybullet.JOINT_FIXED and info[16] in self._static_links:
                 self._static_links.add(index)
         self._joint_indices = [by_name[name] for name in kinematics.joint_names]
-        static = [entry for entry in self.scene_spec
-                  if entry_is_fixed(self.scene_spec, entry.get("name", f"body{self.scene_spec.index(entry)}"))]
+        static = [
+            entry
+            for entry in self.scene_spec
+            if entry_is_fixed(self.scene_spec, entry.get("name", f"body{self.scene_spec.index(entry)}"))
+        ]
         self._bodies = load_scene(client, static)
 
     def _contacts(self, joints):
@@ -159,8 +176,11 @@ class ProgramChecker:
         return found
 
     def _collisions(self, joints):
-        return [(self._link_names.get(link, str(link)), body) for link, body in self._contacts(joints)
-                if link not in self._static_links]
+        return [
+            (self._link_names.get(link, str(link)), body)
+            for link, body in self._contacts(joints)
+            if link not in self._static_links
+        ]
 
     def close(self):
         """Disconnect the pybullet client."""
@@ -174,8 +194,14 @@ class ProgramChecker:
         the first waypoint is checked from there; None skips that segment)."""
         report = CheckReport(robot=self.robot_name)
         if program.robot != self.robot_name:
-            report.issues.append(Issue(None, "", f"taught on robot {program.robot!r}, this robot is "
-                                                 f"{self.robot_name!r}: refusing to replay it on another robot"))
+            report.issues.append(
+                Issue(
+                    None,
+                    "",
+                    f"taught on robot {program.robot!r}, this robot is "
+                    f"{self.robot_name!r}: refusing to replay it on another robot",
+                )
+            )
             return report
         try:
             kin = RobotKinematics(self.urdf_path, program.tool_frame)
@@ -184,8 +210,11 @@ class ProgramChecker:
             return report
         wrong = [i for i, w in enumerate(program.waypoints) if len(w.joints) != kin.dof]
         if wrong:
-            report.issues.append(Issue(None, "", f"waypoints {wrong} have the wrong joint count for "
-                                                 f"{self.robot_name} ({kin.dof} joints)"))
+            report.issues.append(
+                Issue(
+                    None, "", f"waypoints {wrong} have the wrong joint count for {self.robot_name} ({kin.dof} joints)"
+                )
+            )
             return report
         self._world(kin)
         p = self.params
@@ -200,19 +229,37 @@ class ProgramChecker:
             if not kin.within_limits(seed):
                 bad = [kin.joint_names[i] for i in np.flatnonzero((seed < kin.lower) | (seed > kin.upper))]
                 report.issues.append(Issue(index, wp.name, f"recorded joints {bad} outside their limits"))
-            solution = kin.solve_ik(pose_to_se3(wp.position, wp.orientation), seed, max_iterations=200,
-                                    position_tolerance=p["ik_position_tolerance"],
-                                    rotation_tolerance=p["ik_rotation_tolerance"])
+            solution = kin.solve_ik(
+                pose_to_se3(wp.position, wp.orientation),
+                seed,
+                max_iterations=200,
+                position_tolerance=p["ik_position_tolerance"],
+                rotation_tolerance=p["ik_rotation_tolerance"],
+            )
             report.joints.append(solution.joints.tolist())
             if not solution.success:
-                report.issues.append(Issue(index, wp.name, (
-                    f"unreachable: IK from the recorded joints ends {solution.position_error * 1000:.1f} mm / "
-                    f"{solution.rotation_error:.3f} rad from the pose")))
+                report.issues.append(
+                    Issue(
+                        index,
+                        wp.name,
+                        (
+                            f"unreachable: IK from the recorded joints ends {solution.position_error * 1000:.1f} mm / "
+                            f"{solution.rotation_error:.3f} rad from the pose"
+                        ),
+                    )
+                )
                 continue
             if outside(np.asarray(wp.position)):
-                report.issues.append(Issue(index, wp.name, (
-                    f"tool position {np.round(wp.position, 3).tolist()} m is outside the workspace fence "
-                    f"{p['fence_min']}..{p['fence_max']}")))
+                report.issues.append(
+                    Issue(
+                        index,
+                        wp.name,
+                        (
+                            f"tool position {np.round(wp.position, 3).tolist()} m is outside the workspace fence "
+                            f"{p['fence_min']}..{p['fence_max']}"
+                        ),
+                    )
+                )
             hits = self._collisions(solution.joints)
             report.samples += 1
             if hits:
@@ -230,15 +277,22 @@ class ProgramChecker:
                 report.samples += 1
                 issue = self._sample_issue(kin, q, outside)
                 if issue:
-                    report.issues.append(Issue(0, program.waypoints[0].name,
-                                               f"MoveJ from the current pose, at {k / count:.0%}: {issue}"))
+                    report.issues.append(
+                        Issue(0, program.waypoints[0].name, f"MoveJ from the current pose, at {k / count:.0%}: {issue}")
+                    )
                     break
         for index in range(1, len(program.waypoints)):
-            issue = self._movel_issue(kin, program.waypoints[index - 1], program.waypoints[index],
-                                      report.joints[index - 1], report, outside)
+            issue = self._movel_issue(
+                kin, program.waypoints[index - 1], program.waypoints[index], report.joints[index - 1], report, outside
+            )
             if issue:
-                report.issues.append(Issue(index, program.waypoints[index].name,
-                                           f"MoveL from {program.waypoints[index - 1].name!r}: {issue}"))
+                report.issues.append(
+                    Issue(
+                        index,
+                        program.waypoints[index].name,
+                        f"MoveL from {program.waypoints[index - 1].name!r}: {issue}",
+                    )
+                )
         return report
 
     def _sample_issue(self, kin, joints, outside) -> str:
@@ -258,14 +312,21 @@ class ProgramChecker:
         for k in range(1, count + 1):
             fraction = k / count
             target = pose_to_se3(pa + (pb - pa) * fraction, slerp(a.orientation, b.orientation, fraction))
-            solution = kin.solve_ik(target, q, max_iterations=200, position_tolerance=p["ik_position_tolerance"],
-                                    rotation_tolerance=p["ik_rotation_tolerance"])
+            solution = kin.solve_ik(
+                target,
+                q,
+                max_iterations=200,
+                position_tolerance=p["ik_position_tolerance"],
+                rotation_tolerance=p["ik_rotation_tolerance"],
+            )
             if not solution.success:
                 return f"the line is unreachable at {fraction:.0%} (IK error {solution.position_error * 1000:.1f} mm)"
             jump = float(np.max(np.abs(solution.joints - q)))
             if jump > MAX_SAMPLE_JUMP:
-                return (f"the line passes a singularity or flips the arm at {fraction:.0%} "
-                        f"(joints jump {jump:.2f} rad between samples)")
+                return (
+                    f"the line passes a singularity or flips the arm at {fraction:.0%} "
+                    f"(joints jump {jump:.2f} rad between samples)"
+                )
             q = solution.joints
             report.samples += 1
             issue = self._sample_issue(kin, q, outside)

@@ -22,9 +22,10 @@ robot moves at its driver's configured speed (pybullet: ``speed_scale`` and
 ``cartesian_speed`` in hw_interface/config/sim_driver.yaml; UR: ``joint_speed`` and
 ``linear_speed`` in ur_driver.yaml).
 """
+
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable, List, Optional
 
 from hw_interface.protocol import Result
 from motion_commander.manipulation import ManipulationAPI
@@ -38,15 +39,15 @@ class RunOutcome:
     """How a run ended."""
 
     ok: bool
-    result: Optional[int]            # commander.srv Result of the failing answer (None: refused / success)
-    done: int                        # waypoints completed (pose reached and action done)
+    result: int | None  # commander.srv Result of the failing answer (None: refused / success)
+    done: int  # waypoints completed (pose reached and action done)
     total: int
-    elapsed: float                   # s
-    stopped_index: Optional[int] = None
+    elapsed: float  # s
+    stopped_index: int | None = None
     stopped_name: str = ""
     reason: str = ""
     refused: bool = False
-    lines: List[str] = field(default_factory=list)
+    lines: list[str] = field(default_factory=list)
 
     @property
     def exit_code(self) -> int:
@@ -67,9 +68,16 @@ class RunOutcome:
 class ProgramRunner:
     """Checks and runs programs on one controller; ``out`` receives each line printed."""
 
-    def __init__(self, controller, checker=None, speed: float = 1.0, robot_name: Optional[str] = None,
-                 out: Callable[[str], None] = print, clock: Callable[[], float] = time.monotonic,
-                 on_waypoint: Optional[Callable[[int, object], None]] = None):
+    def __init__(
+        self,
+        controller,
+        checker=None,
+        speed: float = 1.0,
+        robot_name: str | None = None,
+        out: Callable[[str], None] = print,
+        clock: Callable[[], float] = time.monotonic,
+        on_waypoint: Callable[[int, object], None] | None = None,
+    ):
         if not 0.0 < float(speed) <= 1.0:
             raise ValueError(f"speed must be a fraction in (0, 1], got {speed!r}")
         self.controller = controller
@@ -79,7 +87,7 @@ class ProgramRunner:
         self.robot_name = robot_name
         self.out = out
         self.clock = clock
-        self.on_waypoint = on_waypoint   # called (index, waypoint) as each waypoint starts
+        self.on_waypoint = on_waypoint  # called (index, waypoint) as each waypoint starts
 
     def robot(self) -> str:
         """The robot's name: ``robot_name`` if given, else the server's (GET_ROBOTS)."""
@@ -119,8 +127,10 @@ class ProgramRunner:
             return self._finish(outcome, start, say)
         if robot and program.robot != robot:
             outcome.refused = True
-            outcome.reason = (f"program taught on robot {program.robot!r}, this robot is {robot!r}: "
-                              "refusing to replay it on another robot")
+            outcome.reason = (
+                f"program taught on robot {program.robot!r}, this robot is {robot!r}: "
+                "refusing to replay it on another robot"
+            )
             say("check REFUSED the program:\n  - " + outcome.reason)
             return self._finish(outcome, start, say)
         report = self.check(program, start_joints)
@@ -168,8 +178,11 @@ class ProgramRunner:
 
     def _finish(self, outcome: RunOutcome, start: float, say) -> RunOutcome:
         outcome.elapsed = self.clock() - start
-        say(f"=== program summary: {outcome.done}/{outcome.total} waypoints done in {outcome.elapsed:.1f} s, "
-            f"result {outcome.result_name}" + (f" ({outcome.reason})" if outcome.reason and not outcome.ok else "")
+        say(
+            f"=== program summary: {outcome.done}/{outcome.total} waypoints done in {outcome.elapsed:.1f} s, "
+            f"result {outcome.result_name}"
+            + (f" ({outcome.reason})" if outcome.reason and not outcome.ok else "")
             + (f"; {outcome.reason}" if outcome.ok and outcome.reason else "")
-            + f"; speed fraction {self.speed:g} (not sent: commander.srv has no speed field) ===")
+            + f"; speed fraction {self.speed:g} (not sent: commander.srv has no speed field) ==="
+        )
         return outcome

@@ -20,44 +20,67 @@ done, or why the event was ignored.
 Programs go to ``output/programs/`` by default (relative to the current directory: a ROS
 node should pass an absolute ``programs_dir``).
 """
+
 import math
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Optional
 
+from motion_commander.program import Program, ProgramError, Waypoint, program_path, save_program
+from motion_common.atomic_file import remove_stale_temp_files
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema, read_yaml_file
 
-from motion_common.atomic_file import remove_stale_temp_files
-from motion_commander.program import Program, ProgramError, Waypoint, program_path, save_program
-
 COMMANDS = ("mark_waypoint", "grip", "release", "undo", "save")
 DEFAULT_PROGRAMS_DIR = os.path.join("output", "programs")
-DEFAULT_GESTURES = {"hold_still": "mark_waypoint", "fist": "grip", "open_palm": "release",
-                    "swipe_left": "undo", "circle": "save"}
+DEFAULT_GESTURES = {
+    "hold_still": "mark_waypoint",
+    "fist": "grip",
+    "open_palm": "release",
+    "swipe_left": "undo",
+    "circle": "save",
+}
 
-GESTURE_SCHEMA = ParamSchema([
-    Param("commands", dict(DEFAULT_GESTURES), doc="recognised gesture name -> teach command " + "|".join(COMMANDS)),
-    Param("repeat_guard_s", 1.0, "s", "a gesture repeated within this time is the same one held: ignored",
-          low=0.0, high=10.0),
-    Param("speed", 0.5, "1", "speed fraction stored in each taught waypoint", low=0.0, high=1.0, low_open=True),
-    Param("min_waypoint_distance", 0.005, "m", "a mark this close to the last waypoint is ignored ...",
-          low=0.0, high=1.0),
-    Param("min_waypoint_angle", 0.05, "rad", "... unless the tool turned at least this much", low=0.0,
-          high=math.pi),
-], ignore=("config_file",))
+GESTURE_SCHEMA = ParamSchema(
+    [
+        Param("commands", dict(DEFAULT_GESTURES), doc="recognised gesture name -> teach command " + "|".join(COMMANDS)),
+        Param(
+            "repeat_guard_s",
+            1.0,
+            "s",
+            "a gesture repeated within this time is the same one held: ignored",
+            low=0.0,
+            high=10.0,
+        ),
+        Param("speed", 0.5, "1", "speed fraction stored in each taught waypoint", low=0.0, high=1.0, low_open=True),
+        Param(
+            "min_waypoint_distance",
+            0.005,
+            "m",
+            "a mark this close to the last waypoint is ignored ...",
+            low=0.0,
+            high=1.0,
+        ),
+        Param(
+            "min_waypoint_angle", 0.05, "rad", "... unless the tool turned at least this much", low=0.0, high=math.pi
+        ),
+    ],
+    ignore=("config_file",),
+)
 
 
-def check_gesture_config(values: Optional[dict], source: str) -> dict:
+def check_gesture_config(values: dict | None, source: str) -> dict:
     """Checked gesture configuration (defaults filled in); ParameterError names ``source``."""
     config = GESTURE_SCHEMA.validate(values, source)
     for gesture, command in config["commands"].items():
         if not isinstance(gesture, str) or not gesture:
             raise ParameterError(f"{source}: parameter 'commands': gesture names are strings, got {gesture!r}")
         if command not in COMMANDS:
-            raise ParameterError(f"{source}: parameter 'commands': gesture {gesture!r} maps to unknown command "
-                                 f"{command!r}; commands are {list(COMMANDS)}")
+            raise ParameterError(
+                f"{source}: parameter 'commands': gesture {gesture!r} maps to unknown command "
+                f"{command!r}; commands are {list(COMMANDS)}"
+            )
     return config
 
 
@@ -86,9 +109,16 @@ class TeachSession:
     one callback queue (or under its own lock).
     """
 
-    def __init__(self, robot: str, robot_state: Callable[[], Optional[tuple]], tool_frame: str = "tool0",
-                 programs_dir: str = DEFAULT_PROGRAMS_DIR, program_name: Optional[str] = None,
-                 config: Optional[dict] = None, clock: Callable[[], float] = time.time):
+    def __init__(
+        self,
+        robot: str,
+        robot_state: Callable[[], tuple | None],
+        tool_frame: str = "tool0",
+        programs_dir: str = DEFAULT_PROGRAMS_DIR,
+        program_name: str | None = None,
+        config: dict | None = None,
+        clock: Callable[[], float] = time.time,
+    ):
         if not robot:
             raise ValueError("robot: name the robot being taught (GET_ROBOTS name)")
         self.robot = robot
@@ -102,15 +132,15 @@ class TeachSession:
         remove_stale_temp_files(programs_dir)
         # Checking an already checked config is harmless: pass load_gesture_config's result.
         self.config = check_gesture_config(config, "teach config")
-        self.waypoints: List[Waypoint] = []
+        self.waypoints: list[Waypoint] = []
         self.gripping = False
-        self.saved_path: Optional[str] = None
+        self.saved_path: str | None = None
         self.dirty = False
-        self._last_gesture: Dict[str, float] = {}
+        self._last_gesture: dict[str, float] = {}
         self._counter = 0
 
     # -- events ----------------------------------------------------------------------------
-    def on_gesture(self, gesture: str, stamp: Optional[float] = None) -> Feedback:
+    def on_gesture(self, gesture: str, stamp: float | None = None) -> Feedback:
         """A recognised gesture: map it to its command (ignore unmapped or held ones)."""
         stamp = self.clock() if stamp is None else float(stamp)
         command = self.config["commands"].get(gesture)
@@ -120,11 +150,14 @@ class TeachSession:
         last = self._last_gesture.get(gesture)
         self._last_gesture[gesture] = stamp
         if last is not None and 0.0 <= stamp - last < self.config["repeat_guard_s"]:
-            return Feedback(False, command, f"ignored: {gesture} repeated within "
-                                            f"{self.config['repeat_guard_s']:g} s (still the same gesture)")
+            return Feedback(
+                False,
+                command,
+                f"ignored: {gesture} repeated within {self.config['repeat_guard_s']:g} s (still the same gesture)",
+            )
         return self.handle_command(command, stamp)
 
-    def handle_command(self, command: str, stamp: Optional[float] = None) -> Feedback:
+    def handle_command(self, command: str, stamp: float | None = None) -> Feedback:
         """A teach command (from a gesture, a button or a service)."""
         if command not in COMMANDS:
             return Feedback(False, command, f"ignored: unknown command {command!r}; commands are {list(COMMANDS)}")
@@ -158,12 +191,24 @@ class TeachSession:
             dot = min(1.0, abs(sum(a * b for a, b in zip(orientation, last.orientation))))
             angle = 2.0 * math.acos(dot)
             if distance < self.config["min_waypoint_distance"] and angle < self.config["min_waypoint_angle"]:
-                return Feedback(False, command, f"ignored: the tool is still at waypoint {len(self.waypoints)} "
-                                                f"{last.name!r} ({distance * 1000:.1f} mm away); move first")
+                return Feedback(
+                    False,
+                    command,
+                    f"ignored: the tool is still at waypoint {len(self.waypoints)} "
+                    f"{last.name!r} ({distance * 1000:.1f} mm away); move first",
+                )
         self._counter += 1
         name = f"wp{self._counter}" if action == "none" else f"{action}{self._counter}"
-        self.waypoints.append(Waypoint(name=name, position=position, orientation=orientation, joints=joints,
-                                       action=action, speed=self.config["speed"]))
+        self.waypoints.append(
+            Waypoint(
+                name=name,
+                position=position,
+                orientation=orientation,
+                joints=joints,
+                action=action,
+                speed=self.config["speed"],
+            )
+        )
         self.dirty = True
         where = "(" + ", ".join(f"{v:.3f}" for v in position) + ") m"
         what = {"none": "waypoint", "grip": "grip", "release": "release"}[action]
@@ -197,8 +242,9 @@ class TeachSession:
         elif removed.action == "release":
             self.gripping = True
         self.dirty = True
-        return Feedback(True, "undo", f"removed waypoint {len(self.waypoints) + 1} {removed.name!r}; "
-                                      f"{len(self.waypoints)} left")
+        return Feedback(
+            True, "undo", f"removed waypoint {len(self.waypoints) + 1} {removed.name!r}; {len(self.waypoints)} left"
+        )
 
     def _do_save(self) -> Feedback:
         if not self.waypoints:

@@ -4,24 +4,23 @@
 program's replay with the taught place pose: the tool position of the program's
 ``release`` waypoint (the suction cup holds the part under the tool).
 """
+
 import json
 import os
-from typing import List, Optional
 
 import numpy as np
 
+from motion_commander.program import Program
 from motion_common.atomic_file import write_atomic
 
-from motion_commander.program import Program
 
-
-def taught_place(program: Program) -> Optional[np.ndarray]:
+def taught_place(program: Program) -> np.ndarray | None:
     """Tool position (m) of the last ``release`` waypoint, or None without one."""
     releases = [w for w in program.waypoints if w.action == "release"]
     return np.asarray(releases[-1].position, dtype=float) if releases else None
 
 
-def placement_error(program: Program, part_position) -> Optional[float]:
+def placement_error(program: Program, part_position) -> float | None:
     """Table-plane distance (m) from the taught place to the part, or None (no release)."""
     place = taught_place(program)
     if place is None:
@@ -37,23 +36,32 @@ def write_summary(path: str, summary: dict) -> str:
 def format_summary(summary: dict) -> str:
     """The lines printed at the end of the demo."""
     error = summary.get("placement_error_mm")
-    lines = ["=== teach demo summary ===",
-             f"gestures recognised      : {summary['gestures_recognised']} ({', '.join(summary['gesture_names'])})",
-             f"teach commands done      : {summary['commands_understood']}",
-             f"waypoints taught         : {summary['waypoints']}",
-             f"program                  : {summary['program']}",
-             f"replay                   : {summary['replay_result']} ({summary['replay_waypoints_done']}/"
-             f"{summary['waypoints']} waypoints, {summary['replay_seconds']:.1f} s)",
-             "placement error          : " + ("n/a (no release taught)" if error is None else f"{error:.2f} mm"),
-             f"plot                     : {summary.get('plot', '')}"]
+    lines = [
+        "=== teach demo summary ===",
+        f"gestures recognised      : {summary['gestures_recognised']} ({', '.join(summary['gesture_names'])})",
+        f"teach commands done      : {summary['commands_understood']}",
+        f"waypoints taught         : {summary['waypoints']}",
+        f"program                  : {summary['program']}",
+        f"replay                   : {summary['replay_result']} ({summary['replay_waypoints_done']}/"
+        f"{summary['waypoints']} waypoints, {summary['replay_seconds']:.1f} s)",
+        "placement error          : " + ("n/a (no release taught)" if error is None else f"{error:.2f} mm"),
+        f"plot                     : {summary.get('plot', '')}",
+    ]
     return "\n".join(lines)
 
 
-def plot_taught_path(path: str, tool_path: List[tuple], program: Program, part_start=None, part_end=None,
-                     title: str = "taught pick-and-place") -> str:
+def plot_taught_path(
+    path: str,
+    tool_path: list[tuple],
+    program: Program,
+    part_start=None,
+    part_end=None,
+    title: str = "taught pick-and-place",
+) -> str:
     """PNG: the tool's path while teaching (top view and height over time) with the taught
     waypoints marked (grip / release highlighted) and the part before and after the replay."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -65,22 +73,43 @@ def plot_taught_path(path: str, tool_path: List[tuple], program: Program, part_s
         height.plot(samples[:, 0] - samples[0, 0], samples[:, 3] * 1000, color="0.6", lw=1, label="tool z")
     labels = {}  # waypoints stacked above each other (above, at, grip) share one label
     for index, waypoint in enumerate(program.waypoints):
-        marker, color = {"grip": ("v", "tab:red"), "release": ("^", "tab:green")}.get(waypoint.action, ("o", "tab:blue"))
+        marker, color = {"grip": ("v", "tab:red"), "release": ("^", "tab:green")}.get(
+            waypoint.action, ("o", "tab:blue")
+        )
         top.scatter(waypoint.position[0] * 1000, waypoint.position[1] * 1000, marker=marker, color=color, zorder=3)
         key = tuple(np.round(np.asarray(waypoint.position[:2]) * 1000 / 5))  # 5 mm cells
         labels.setdefault(key, (waypoint.position, []))[1].append(str(index))
     for position, indices in labels.values():
-        top.annotate(",".join(indices), (position[0] * 1000, position[1] * 1000), textcoords="offset points",
-                     xytext=(6, 4), fontsize=8)
+        top.annotate(
+            ",".join(indices),
+            (position[0] * 1000, position[1] * 1000),
+            textcoords="offset points",
+            xytext=(6, 4),
+            fontsize=8,
+        )
     if len(waypoints):
-        top.plot(waypoints[:, 0] * 1000, waypoints[:, 1] * 1000, color="tab:blue", lw=1.5, alpha=0.6,
-                 label="program (waypoints: o move, v grip, ^ release)")
+        top.plot(
+            waypoints[:, 0] * 1000,
+            waypoints[:, 1] * 1000,
+            color="tab:blue",
+            lw=1.5,
+            alpha=0.6,
+            label="program (waypoints: o move, v grip, ^ release)",
+        )
     if part_start is not None:
-        top.scatter(part_start[0] * 1000, part_start[1] * 1000, marker="s", s=80, facecolors="none",
-                    edgecolors="k", label="part at start")
+        top.scatter(
+            part_start[0] * 1000,
+            part_start[1] * 1000,
+            marker="s",
+            s=80,
+            facecolors="none",
+            edgecolors="k",
+            label="part at start",
+        )
     if part_end is not None:
-        top.scatter(part_end[0] * 1000, part_end[1] * 1000, marker="s", s=80, color="goldenrod",
-                    label="part after the replay")
+        top.scatter(
+            part_end[0] * 1000, part_end[1] * 1000, marker="s", s=80, color="goldenrod", label="part after the replay"
+        )
     top.set_xlabel("x (mm, base frame)")
     top.set_ylabel("y (mm)")
     top.set_title("top view")

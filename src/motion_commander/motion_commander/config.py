@@ -4,6 +4,7 @@ Every parameter lives in config/teleop.yaml with its unit; ``TELEOP_PARAMETERS``
 them for the framework's one validator (motion_common.params), and ``load_teleop_config``
 checks them once at start-up, naming the file and key of anything wrong.
 """
+
 from dataclasses import dataclass, field, fields
 
 from motion_common.errors import ParameterError
@@ -11,15 +12,25 @@ from motion_common.params import Param, ParamSchema
 
 from .teleop_core import SAFETY_PARAMS, SafetyConfig
 
-
 _MAPPING = [
     Param("tool_frame", "tool0", doc="URDF frame that follows the hand"),
-    Param("input", "stamped", choices=("stamped", "pose"),
-          doc="stamped: /motion_states_stamped (sensor stamp kept); pose: /motion_states from any source"),
+    Param(
+        "input",
+        "stamped",
+        choices=("stamped", "pose"),
+        doc="stamped: /motion_states_stamped (sensor stamp kept); pose: /motion_states from any source",
+    ),
     Param("speed_ratio", 1.0, "m/m", "tool motion per hand motion", low=0.0, high=10.0, low_open=True),
     Param("follow_orientation", True, doc="rotate the tool with the hand"),
-    Param("hand_to_robot_rpy", [0.0, 0.0, 0.0], "rad", "device frame orientation in the base frame",
-          length=3, low=-6.3, high=6.3),
+    Param(
+        "hand_to_robot_rpy",
+        [0.0, 0.0, 0.0],
+        "rad",
+        "device frame orientation in the base frame",
+        length=3,
+        low=-6.3,
+        high=6.3,
+    ),
     Param("registration_file", "", doc="register_device YAML; its rotation replaces hand_to_robot_rpy"),
     Param("engage", "auto", choices=("auto", "gesture", "button"), doc="clutch mode"),
     Param("steady_frames", 10, "frames", "steady tracking before engage", low=1, high=1000),
@@ -27,10 +38,23 @@ _MAPPING = [
 ]
 _NODE = [
     Param("urdf", "", doc="robot URDF path (set by the launch file)"),
-    Param("ready_timeout_s", 60.0, "s", "how long to wait for the robot server before giving up", low=0.0,
-          high=3600.0, low_open=True),
-    Param("prepare_lead_s", 0.0015, "s", "before the next frame is due, the core prepares its pose-independent "
-          "work (0: right after each command)", low=0.0, high=0.05),
+    Param(
+        "ready_timeout_s",
+        60.0,
+        "s",
+        "how long to wait for the robot server before giving up",
+        low=0.0,
+        high=3600.0,
+        low_open=True,
+    ),
+    Param(
+        "prepare_lead_s",
+        0.0015,
+        "s",
+        "before the next frame is due, the core prepares its pose-independent work (0: right after each command)",
+        low=0.0,
+        high=0.05,
+    ),
 ]
 _MAPPING_PARAMS = ParamSchema(_MAPPING)
 

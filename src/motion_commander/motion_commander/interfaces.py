@@ -2,6 +2,7 @@
 parameters with default, unit and range, and the topics and services each node uses, all
 with relative names. No ROS import.
 """
+
 from motion_common.interface import NodeInterface, Service, Topic
 from motion_common.params import Param, ParamSchema
 
@@ -13,27 +14,35 @@ _POSE = "geometry_msgs/PoseStamped"
 _COMMANDER = "motion_commander/commander"
 
 MOTION_COMMANDER = NodeInterface(
-    "motion_commander", "motion_commander",
+    "motion_commander",
+    "motion_commander",
     "The core: maps the filtered hand onto the tool (clutch, speed ratio), solves IK, applies the safety rules "
     "and streams joint targets to the server (`motion_controller`); also serves the paper's manipulation API.",
     TELEOP_PARAMETERS,
     publishes=(
         Topic("motion_commander/status", "std_msgs/UInt8", "TeleopStatus code", latched=True),
         Topic("motion_commander/target", _POSE, "the mapped tool target"),
-        Topic("motion_commander/latency", "motion_commander/StageLatency", "sensor -> sequencer -> core -> "
-              "driver, per command"),
+        Topic(
+            "motion_commander/latency",
+            "motion_commander/StageLatency",
+            "sensor -> sequencer -> core -> driver, per command",
+        ),
         Topic("robot_pose", _POSE, "tool pose by forward kinematics of joint_states (while subscribed)"),
         Topic("motion_commander/command", "sensor_msgs/JointState", "the joint targets sent, sensor stamp"),
-        Topic("motion_commander/ready", "std_msgs/Bool", "True once the core has the robot state and its pose "
-              "input is connected", latched=True),
+        Topic(
+            "motion_commander/ready",
+            "std_msgs/Bool",
+            "True once the core has the robot state and its pose input is connected",
+            latched=True,
+        ),
         Topic("motion_commander/speed_ratio", "std_msgs/Float64", "the speed ratio in force", latched=True),
     ),
     subscribes=(
         Topic("joint_states", "sensor_msgs/JointState", "the measured joints"),
-        Topic("motion_states_stamped", _POSE, "the hand pose with its sensor stamp (input: stamped)",
-              optional=True),
-        Topic("motion_states", "geometry_msgs/Pose", "any pose source, stamped on arrival (input: pose)",
-              optional=True),
+        Topic("motion_states_stamped", _POSE, "the hand pose with its sensor stamp (input: stamped)", optional=True),
+        Topic(
+            "motion_states", "geometry_msgs/Pose", "any pose source, stamped on arrival (input: pose)", optional=True
+        ),
         Topic("motion_sensor/hand", "motion_sensor/hand", "hands in view (engage: gesture)", optional=True),
         Topic("motion_commander/engage", "std_msgs/Bool", "clutch button (engage: button)"),
         Topic("motion_commander/estop", "std_msgs/Bool", "True latches the server's stop and disengages"),
@@ -49,15 +58,17 @@ MOTION_COMMANDER = NodeInterface(
 )
 
 SESSION_MONITOR = NodeInterface(
-    "motion_commander", "session_monitor",
+    "motion_commander",
+    "session_monitor",
     "Observes a session and, when the recording has played, prints the summary and writes "
     "session_summary.json and session_paths.png.",
-    ParamSchema([
-        Param("output_dir", "output", doc="folder for session_summary.json and session_paths.png"),
-        Param("title", "teleop session", doc="plot title"),
-        Param("settle", 1.5, "s", "wait after the end for the arm to settle before reporting", low=0.0,
-              high=60.0),
-    ]),
+    ParamSchema(
+        [
+            Param("output_dir", "output", doc="folder for session_summary.json and session_paths.png"),
+            Param("title", "teleop session", doc="plot title"),
+            Param("settle", 1.5, "s", "wait after the end for the arm to settle before reporting", low=0.0, high=60.0),
+        ]
+    ),
     subscribes=(
         Topic("motion_sensor/raw_hand", "motion_sensor/hand", "device frames (counted, the raw path)"),
         Topic("motion_sensor/hand", "motion_sensor/hand", "the filtered hand"),
@@ -66,8 +77,11 @@ SESSION_MONITOR = NodeInterface(
         Topic("motion_controller/trace", "motion_commander/CommandTrace", "sensor-to-driver latency"),
         Topic("diagnostics", "diagnostic_msgs/DiagnosticArray", "the sequencer's counters"),
         Topic("motion_commander/latency", "motion_commander/StageLatency", "per-stage latency"),
-        Topic("hand_replay/finished", "std_msgs/Bool", "True when the recording has played (remap for "
-              "another finite device)"),
+        Topic(
+            "hand_replay/finished",
+            "std_msgs/Bool",
+            "True when the recording has played (remap for another finite device)",
+        ),
     ),
 )
 

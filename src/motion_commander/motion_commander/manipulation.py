@@ -6,7 +6,8 @@ hw_interface's MotionControllerClient (get_joints, get_pose, move_j, move_l, set
 each raising an exception with a ``result`` code on refusal. It holds no ROS code, so
 scripts and tests can give it a client, a driver adapter or a fake.
 """
-from typing import Optional, Sequence
+
+from collections.abc import Sequence
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -92,11 +93,11 @@ class ManipulationAPI:
     def _above(self, position):
         return np.asarray(position, dtype=float) + [0.0, 0.0, self.approach_height]
 
-    def pick(self, position, orientation: Optional[Sequence[float]] = None) -> None:
+    def pick(self, position, orientation: Sequence[float] | None = None) -> None:
         """Approach above, descend, grip, retreat. Orientation defaults to the current one."""
         self._visit(position, orientation, grip=True)
 
-    def place(self, position, orientation: Optional[Sequence[float]] = None) -> None:
+    def place(self, position, orientation: Sequence[float] | None = None) -> None:
         """Approach above, descend, release, retreat."""
         self._visit(position, orientation, grip=False)
 

@@ -12,8 +12,8 @@ The next arrival is predicted from the median of recent inter-arrival intervals,
 device's own rate (Leap 110 Hz, SpaceMouse, a camera) is learnt, and one late or early
 frame does not move the prediction. Plain Python (no ROS): the node owns the thread.
 """
+
 from collections import deque
-from typing import Optional
 
 from .errors import MotionCommanderError
 
@@ -36,7 +36,7 @@ class PrepareTiming:
         self.lead_s = float(lead_s)
         self.max_interval_s = float(max_interval_s)
         self._intervals = deque(maxlen=window)
-        self._last_arrival: Optional[float] = None
+        self._last_arrival: float | None = None
 
     def on_frame(self, arrival: float) -> None:
         """Record that a frame arrived at ``arrival``."""
@@ -47,14 +47,14 @@ class PrepareTiming:
         self._last_arrival = arrival
 
     @property
-    def period(self) -> Optional[float]:
+    def period(self) -> float | None:
         """The median recent frame interval (s); None until three intervals are known."""
         if len(self._intervals) < 3:
             return None
         ordered = sorted(self._intervals)
         return ordered[len(ordered) // 2]
 
-    def prepare_at(self) -> Optional[float]:
+    def prepare_at(self) -> float | None:
         """When to prepare for the next frame: ``lead_s`` before it is due, on the arrival
         clock. None: prepare at once (no lead configured, the rate not known yet, or the
         period too short for the lead)."""

@@ -20,10 +20,10 @@ writes a temporary file in the same folder, flushes and fsyncs it, renames it ov
 target with ``os.replace`` (atomic on POSIX) and fsyncs the folder: a crash at any moment
 leaves either the old or the new program, never a truncated or mixed one.
 """
+
 import math
 import os
 from dataclasses import dataclass, field
-from typing import List
 
 import yaml
 
@@ -39,25 +39,31 @@ class ProgramError(Exception):
     """A program file that cannot be read, is invalid, or cannot be written."""
 
 
-POSE_SCHEMA = ParamSchema([
-    Param("position", [0.0, 0.0, 0.0], "m", "tool position in the robot base frame", length=3),
-    Param("orientation", [0.0, 0.0, 0.0, 1.0], "1", "tool orientation, quaternion x, y, z, w", length=4),
-])
+POSE_SCHEMA = ParamSchema(
+    [
+        Param("position", [0.0, 0.0, 0.0], "m", "tool position in the robot base frame", length=3),
+        Param("orientation", [0.0, 0.0, 0.0, 1.0], "1", "tool orientation, quaternion x, y, z, w", length=4),
+    ]
+)
 
-WAYPOINT_SCHEMA = ParamSchema([
-    Param("name", "", doc="waypoint name, unique in the program"),
-    Param("pose", {}, doc="position (m) and orientation (quaternion x, y, z, w)", schema=POSE_SCHEMA),
-    Param("joints", [], "rad", "the arm's joints when the waypoint was taught (IK seed)"),
-    Param("action", "none", doc="gripper action once the pose is reached", choices=ACTIONS),
-    Param("speed", 1.0, "1", "fraction of the robot's configured speed", low=0.0, high=1.0, low_open=True),
-])
+WAYPOINT_SCHEMA = ParamSchema(
+    [
+        Param("name", "", doc="waypoint name, unique in the program"),
+        Param("pose", {}, doc="position (m) and orientation (quaternion x, y, z, w)", schema=POSE_SCHEMA),
+        Param("joints", [], "rad", "the arm's joints when the waypoint was taught (IK seed)"),
+        Param("action", "none", doc="gripper action once the pose is reached", choices=ACTIONS),
+        Param("speed", 1.0, "1", "fraction of the robot's configured speed", low=0.0, high=1.0, low_open=True),
+    ]
+)
 
-PROGRAM_SCHEMA = ParamSchema([
-    Param("format_version", FORMAT_VERSION, doc="program file format", low=1),
-    Param("robot", "", doc="name of the robot the program was taught on"),
-    Param("tool_frame", "tool0", doc="URDF frame the poses are of"),
-    Param("waypoints", [], doc="the waypoints, in order", item_kind=dict),
-])
+PROGRAM_SCHEMA = ParamSchema(
+    [
+        Param("format_version", FORMAT_VERSION, doc="program file format", low=1),
+        Param("robot", "", doc="name of the robot the program was taught on"),
+        Param("tool_frame", "tool0", doc="URDF frame the poses are of"),
+        Param("waypoints", [], doc="the waypoints, in order", item_kind=dict),
+    ]
+)
 
 _REQUIRED_TOP = ("format_version", "robot", "waypoints")
 # libyaml's parser and emitter when present (several times faster), else pure Python.
@@ -71,19 +77,23 @@ class Waypoint:
     """One taught pose: where the tool goes, the joints it had, and what to do there."""
 
     name: str
-    position: List[float]
-    orientation: List[float]
-    joints: List[float]
+    position: list[float]
+    orientation: list[float]
+    joints: list[float]
     action: str = "none"
     speed: float = 1.0
 
     def to_dict(self) -> dict:
-        return {"name": self.name,
-                "pose": {"position": [float(v) for v in self.position],
-                         "orientation": [float(v) for v in self.orientation]},
-                "joints": [float(v) for v in self.joints],
-                "action": self.action,
-                "speed": float(self.speed)}
+        return {
+            "name": self.name,
+            "pose": {
+                "position": [float(v) for v in self.position],
+                "orientation": [float(v) for v in self.orientation],
+            },
+            "joints": [float(v) for v in self.joints],
+            "action": self.action,
+            "speed": float(self.speed),
+        }
 
 
 @dataclass
@@ -92,25 +102,32 @@ class Program:
 
     robot: str
     tool_frame: str = "tool0"
-    waypoints: List[Waypoint] = field(default_factory=list)
+    waypoints: list[Waypoint] = field(default_factory=list)
     format_version: int = FORMAT_VERSION
 
     def to_dict(self) -> dict:
-        return {"format_version": int(self.format_version), "robot": self.robot, "tool_frame": self.tool_frame,
-                "waypoints": [w.to_dict() for w in self.waypoints]}
+        return {
+            "format_version": int(self.format_version),
+            "robot": self.robot,
+            "tool_frame": self.tool_frame,
+            "waypoints": [w.to_dict() for w in self.waypoints],
+        }
 
     def to_yaml(self) -> str:
-        return ("# Gesture-taught program (motion_commander.program, format_version 1): positions in m "
-                "(robot base frame),\n# orientations quaternion x, y, z, w, joints in rad, speed a "
-                "fraction (0, 1], action none|grip|release.\n"
-                + yaml.dump(self.to_dict(), Dumper=_Dumper, sort_keys=False, default_flow_style=None, width=200))
+        return (
+            "# Gesture-taught program (motion_commander.program, format_version 1): positions in m "
+            "(robot base frame),\n# orientations quaternion x, y, z, w, joints in rad, speed a "
+            "fraction (0, 1], action none|grip|release.\n"
+            + yaml.dump(self.to_dict(), Dumper=_Dumper, sort_keys=False, default_flow_style=None, width=200)
+        )
 
 
 def parse_program(data, source: str) -> Program:
     """A Program from parsed YAML ``data``; ``source`` (the file) is named in every error."""
     if not isinstance(data, dict):
-        raise ProgramError(f"{source}: a program file holds a mapping with {list(_REQUIRED_TOP)}, got "
-                           f"{type(data).__name__}")
+        raise ProgramError(
+            f"{source}: a program file holds a mapping with {list(_REQUIRED_TOP)}, got {type(data).__name__}"
+        )
     missing = [key for key in _REQUIRED_TOP if key not in data]
     if missing:
         raise ProgramError(f"{source}: missing {missing} (a program needs {list(_REQUIRED_TOP)})")
@@ -119,16 +136,18 @@ def parse_program(data, source: str) -> Program:
     except ParameterError as exc:
         raise ProgramError(str(exc)) from None
     if top["format_version"] != FORMAT_VERSION:
-        raise ProgramError(f"{source}: format_version {top['format_version']} is not supported "
-                           f"(this version reads {FORMAT_VERSION})")
+        raise ProgramError(
+            f"{source}: format_version {top['format_version']} is not supported (this version reads {FORMAT_VERSION})"
+        )
     if not top["robot"].strip():
         raise ProgramError(f"{source}: 'robot' must name the robot the program was taught on")
     if not top["waypoints"]:
         raise ProgramError(f"{source}: the program has no waypoints")
     waypoints, names = [], {}
     for index, entry in enumerate(data["waypoints"]):
-        where = f"{source}: waypoint {index}" + (f" ({entry.get('name')!r})" if isinstance(entry, dict)
-                                                 and entry.get("name") else "")
+        where = f"{source}: waypoint {index}" + (
+            f" ({entry.get('name')!r})" if isinstance(entry, dict) and entry.get("name") else ""
+        )
         waypoint = _parse_waypoint(entry, where)
         if waypoint.name in names:
             raise ProgramError(f"{where}: name {waypoint.name!r} already used by waypoint {names[waypoint.name]}")
@@ -136,8 +155,9 @@ def parse_program(data, source: str) -> Program:
         if waypoints and len(waypoint.joints) != len(waypoints[0].joints):
             raise ProgramError(f"{where}: {len(waypoint.joints)} joints, waypoint 0 has {len(waypoints[0].joints)}")
         waypoints.append(waypoint)
-    return Program(robot=top["robot"], tool_frame=top["tool_frame"], waypoints=waypoints,
-                   format_version=top["format_version"])
+    return Program(
+        robot=top["robot"], tool_frame=top["tool_frame"], waypoints=waypoints, format_version=top["format_version"]
+    )
 
 
 def _parse_waypoint(entry, where: str) -> Waypoint:
@@ -159,10 +179,17 @@ def _parse_waypoint(entry, where: str) -> Waypoint:
     quat = values["pose"]["orientation"]
     norm = math.sqrt(sum(v * v for v in quat))
     if abs(norm - 1.0) > 1e-3:
-        raise ProgramError(f"{where}: pose.orientation {quat} is not a unit quaternion (norm {norm:.4f}); "
-                           "give x, y, z, w")
-    return Waypoint(name=values["name"], position=values["pose"]["position"], orientation=[v / norm for v in quat],
-                    joints=values["joints"], action=values["action"], speed=values["speed"])
+        raise ProgramError(
+            f"{where}: pose.orientation {quat} is not a unit quaternion (norm {norm:.4f}); give x, y, z, w"
+        )
+    return Waypoint(
+        name=values["name"],
+        position=values["pose"]["position"],
+        orientation=[v / norm for v in quat],
+        joints=values["joints"],
+        action=values["action"],
+        speed=values["speed"],
+    )
 
 
 def load_program(path: str) -> Program:

@@ -10,6 +10,7 @@ Each rule is small and separately testable:
 - EngageRamp: the allowed speed ramps from zero after engage or resume (no start-up jerk);
 - StaleCommandWatchdog: a command older than the timeout halts the robot.
 """
+
 import math
 from dataclasses import dataclass
 
@@ -43,8 +44,9 @@ class JointStepLimiter:
     hand that reverses brakes in time instead of running past the reversal point.
     """
 
-    def __init__(self, velocity_limits, scale: float = 0.5, acceleration_limit=None, min_dt: float = 0.002,
-                 max_dt: float = 0.05):
+    def __init__(
+        self, velocity_limits, scale: float = 0.5, acceleration_limit=None, min_dt: float = 0.002, max_dt: float = 0.05
+    ):
         limits = np.asarray(velocity_limits, dtype=float)
         if not (0 < scale <= 1):
             raise MotionCommanderError(f"joint speed scale must be in (0, 1], got {scale!r}")

@@ -1,8 +1,8 @@
 """Figures and plot of a teleop session: how well the tool followed the scaled hand path
 and how long commands took from sensor to driver. Pure Python (numpy, matplotlib Agg)."""
+
 import json
 from dataclasses import dataclass, field
-from typing import List
 
 import numpy as np
 
@@ -20,14 +20,14 @@ class SessionData:
     frames_out: int = 0
     frames_dropped: int = 0
     commands_refused: int = 0
-    targets: List[tuple] = field(default_factory=list)
-    tools: List[tuple] = field(default_factory=list)
-    latencies: List[float] = field(default_factory=list)
-    stage_latencies: List[tuple] = field(default_factory=list)  # (sequencer, core, driver) s
+    targets: list[tuple] = field(default_factory=list)
+    tools: list[tuple] = field(default_factory=list)
+    latencies: list[float] = field(default_factory=list)
+    stage_latencies: list[tuple] = field(default_factory=list)  # (sequencer, core, driver) s
     # (sensor stamp, x, y, z) of the hand in the device frame: the sequencer's filtered
     # output and the device's raw frames, to judge tracking on what the operator did.
-    hands: List[tuple] = field(default_factory=list)
-    raw_hands: List[tuple] = field(default_factory=list)
+    hands: list[tuple] = field(default_factory=list)
+    raw_hands: list[tuple] = field(default_factory=list)
 
 
 def tracking_errors(targets: np.ndarray, tools: np.ndarray) -> np.ndarray:
@@ -108,8 +108,11 @@ def summarize(data: SessionData) -> dict:
     targets = np.asarray(data.targets, dtype=float).reshape(-1, 4)
     tools = np.asarray(data.tools, dtype=float).reshape(-1, 4)
     errors = tracking_errors(targets, tools) * 1000.0
-    raw_targets = raw_hand_targets(targets, np.asarray(data.hands, dtype=float).reshape(-1, 4),
-                                   np.asarray(data.raw_hands, dtype=float).reshape(-1, 4))
+    raw_targets = raw_hand_targets(
+        targets,
+        np.asarray(data.hands, dtype=float).reshape(-1, 4),
+        np.asarray(data.raw_hands, dtype=float).reshape(-1, 4),
+    )
     raw_errors = tracking_errors(raw_targets, tools) * 1000.0
     latencies = np.asarray(data.latencies, dtype=float) * 1000.0
     settled = final_error(targets, tools)
@@ -125,12 +128,12 @@ def summarize(data: SessionData) -> dict:
         "commands_sent": len(targets),
         "commands_refused": data.commands_refused,
         "hand_path_length_mm": round(path_length * 1000.0, 1),
-        "tracking_error_rms_mm": round(float(np.sqrt(np.mean(errors ** 2))), 3) if len(errors) else None,
+        "tracking_error_rms_mm": round(float(np.sqrt(np.mean(errors**2))), 3) if len(errors) else None,
         "tracking_error_p95_mm": pct(errors, 95),
         "tracking_error_max_mm": round(float(errors.max()), 3) if len(errors) else None,
         "final_error_mm": round(settled * 1000.0, 3) if np.isfinite(settled) else None,
         "overshoot_mm": round(overshoot(targets, tools) * 1000.0, 3),
-        "raw_tracking_error_rms_mm": round(float(np.sqrt(np.mean(raw_errors ** 2))), 3) if len(raw_errors) else None,
+        "raw_tracking_error_rms_mm": round(float(np.sqrt(np.mean(raw_errors**2))), 3) if len(raw_errors) else None,
         "raw_tracking_error_p95_mm": pct(raw_errors, 95),
         "latency_p50_ms": pct(latencies, 50),
         "latency_p99_ms": pct(latencies, 99),
@@ -144,13 +147,18 @@ def _stage_figures(rows):
     stages = np.asarray(rows, dtype=float).reshape(-1, 3) * 1000.0
     if not len(stages):
         return {}
-    return {name: {"p50": round(float(np.percentile(stages[:, i], 50)), 3),
-                   "p99": round(float(np.percentile(stages[:, i], 99)), 3)}
-            for i, name in enumerate(("sequencer", "core", "driver"))}
+    return {
+        name: {
+            "p50": round(float(np.percentile(stages[:, i], 50)), 3),
+            "p99": round(float(np.percentile(stages[:, i], 99)), 3),
+        }
+        for i, name in enumerate(("sequencer", "core", "driver"))
+    }
 
 
 def format_summary(summary: dict, plot_path: str = "") -> str:
     """Human-readable summary block for the end of a run."""
+
     def show(value, unit):
         return "n/a" if value is None else f"{value} {unit}"
 
@@ -180,6 +188,7 @@ def format_summary(summary: dict, plot_path: str = "") -> str:
 def plot_session(data: SessionData, path: str, title: str = "teleop session") -> str:
     """Write a PNG of the scaled hand path against the tool path; return its path."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -6,13 +6,13 @@ target is the reference tool pose moved by the hand's displacement (scaled by th
 ratio) and rotated by the hand's rotation since engage. Because the first target equals the
 current tool pose, engaging never makes the robot jump.
 """
-from typing import Optional
 
 import numpy as np
 
-from .errors import MotionCommanderError
 from motion_common.float_list import float_list
 from motion_common.kinematics import matrix_to_quat, quat_to_matrix
+
+from .errors import MotionCommanderError
 
 
 def _checked_ratio(speed_ratio) -> float:
@@ -134,7 +134,7 @@ class AutoClutch:
         self.steady_frames = steady_frames
         self.lost_after_s = lost_after_s
         self._count = 0
-        self._last_stamp: Optional[float] = None
+        self._last_stamp: float | None = None
 
     def reset(self) -> None:
         """Require a fresh run of steady frames before engaging again."""

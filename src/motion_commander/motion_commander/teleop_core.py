@@ -4,40 +4,50 @@ The node feeds it hand poses, the robot's measured joints, the clutch button and
 e-stop; it answers with the joint target to stream, or with the status that explains why
 nothing is sent. ``tick`` tells the node when to halt the robot (stale input).
 """
+
 import enum
 import math
-from dataclasses import dataclass, field
-from typing import Optional
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from motion_common.errors import ParameterError
 from motion_common.float_list import float_list
-from motion_common.params import Param, ParamSchema
 from motion_common.kinematics import RobotKinematics
+from motion_common.params import Param, ParamSchema
 from motion_common.rotations import is_unit_quaternion, matrix_to_quaternion
-from .safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard, StaleCommandWatchdog,
-                     WorkspaceFence, condition_certainly_below, condition_number, extreme_singular_values)
+
+from .safety import (
+    EngageRamp,
+    JointLimitMargin,
+    JointStepLimiter,
+    SingularityGuard,
+    StaleCommandWatchdog,
+    WorkspaceFence,
+    condition_certainly_below,
+    condition_number,
+    extreme_singular_values,
+)
 from .teleop import AutoClutch, TeleopMapper
 
 
 class TeleopStatus(enum.IntEnum):
     """Status codes published on /motion_commander/status (std_msgs/UInt8 data)."""
 
-    WAITING_FOR_ROBOT = 0     # no /joint_states yet: nothing can be commanded
-    DISENGAGED = 1            # clutch open: the robot holds still
-    ENGAGED = 2               # commands are streaming at full allowed speed
-    JOINT_SPEED_LIMITED = 3   # engaged; this command was slowed to the joint velocity/acceleration limits
-    IK_FAILED = 4             # the target is unreachable: the robot holds its last command
-    BAD_INPUT = 5             # the hand pose was not finite / not a unit quaternion: ignored
-    STALE_INPUT_HALT = 6      # no fresh command within the stale timeout: the robot was halted
+    WAITING_FOR_ROBOT = 0  # no /joint_states yet: nothing can be commanded
+    DISENGAGED = 1  # clutch open: the robot holds still
+    ENGAGED = 2  # commands are streaming at full allowed speed
+    JOINT_SPEED_LIMITED = 3  # engaged; this command was slowed to the joint velocity/acceleration limits
+    IK_FAILED = 4  # the target is unreachable: the robot holds its last command
+    BAD_INPUT = 5  # the hand pose was not finite / not a unit quaternion: ignored
+    STALE_INPUT_HALT = 6  # no fresh command within the stale timeout: the robot was halted
     SINGULARITY_SLOWDOWN = 7  # near a singularity: motion toward it is slowed
-    SINGULARITY_HALT = 8      # at the singularity threshold: motion toward it is stopped
-    WORKSPACE_LIMIT = 9       # the target left the workspace fence (box/floor): clamped to it
-    JOINT_LIMIT_MARGIN = 10   # a joint target was clipped to its limit minus the margin
-    ESTOP = 11                # e-stop active: robot halted, teleop disengaged until released
-    RAMPING = 12              # just engaged or resumed: speed ramping up from zero
+    SINGULARITY_HALT = 8  # at the singularity threshold: motion toward it is stopped
+    WORKSPACE_LIMIT = 9  # the target left the workspace fence (box/floor): clamped to it
+    JOINT_LIMIT_MARGIN = 10  # a joint target was clipped to its limit minus the margin
+    ESTOP = 11  # e-stop active: robot halted, teleop disengaged until released
+    RAMPING = 12  # just engaged or resumed: speed ramping up from zero
 
 
 # Engaged and commanding at the allowed speed: the statuses a fast hand moves among many
@@ -49,32 +59,58 @@ class Action(enum.Enum):
     """What tick() asks the node to do."""
 
     NONE = 0
-    HALT = 1        # send STOP: stale input
-    DISENGAGE = 2   # hand lost: disengage (and hold)
+    HALT = 1  # send STOP: stale input
+    DISENGAGE = 2  # hand lost: disengage (and hold)
 
 
 #: The safety rules' parameters (moveit_servo's set), declared once: the node's schema
 #: (motion_commander.config) and ``SafetyConfig`` both take their defaults from here.
-SAFETY_PARAMS = ParamSchema([
-    Param("joint_speed_scale", 1.0, "fraction", "of the URDF joint velocity limits", low=0.0, high=1.0,
-          low_open=True),
-    Param("joint_acceleration", 200.0, "rad/s^2", "change of commanded joint velocity; the limiter also brakes to "
-          "stop at the target (empty: unlimited)", kind=float, low=0.0, high=1000.0, low_open=True, nullable=True),
-    Param("joint_limit_margin", 0.05, "rad", "kept clear of every URDF joint limit", low=0.0, high=0.5),
-    # UR5e: 8 at home, 40 with the wrist (q5) or elbow (q3) ~0.2 rad from straight.
-    Param("singularity_slowdown", 40.0, "condition number", "motion toward a singularity slows here",
-          low=1.0, high=1e6),
-    Param("singularity_halt", 80.0, "condition number", "motion toward a singularity stops here",
-          low=1.0, high=1e6),
-    Param("workspace_lower", [-1.2, -1.2, 0.0], "m", "tool target box, robot base frame", length=3, low=-10,
-          high=10),
-    Param("workspace_upper", [1.2, 1.2, 1.3], "m", "tool target box, robot base frame", length=3, low=-10,
-          high=10),
-    Param("floor_z", 0.02, "m", "the tool target never goes below this height", low=-10.0, high=10.0),
-    Param("engage_ramp_s", 0.3, "s", "speed ramps from 0 after engage or resume", low=0.0, high=10.0),
-    Param("stale_timeout_s", 0.1, "s", "without a fresh command before the robot is halted", low=0.0, high=5.0,
-          low_open=True),
-])
+SAFETY_PARAMS = ParamSchema(
+    [
+        Param(
+            "joint_speed_scale", 1.0, "fraction", "of the URDF joint velocity limits", low=0.0, high=1.0, low_open=True
+        ),
+        Param(
+            "joint_acceleration",
+            200.0,
+            "rad/s^2",
+            "change of commanded joint velocity; the limiter also brakes to stop at the target (empty: unlimited)",
+            kind=float,
+            low=0.0,
+            high=1000.0,
+            low_open=True,
+            nullable=True,
+        ),
+        Param("joint_limit_margin", 0.05, "rad", "kept clear of every URDF joint limit", low=0.0, high=0.5),
+        # UR5e: 8 at home, 40 with the wrist (q5) or elbow (q3) ~0.2 rad from straight.
+        Param(
+            "singularity_slowdown",
+            40.0,
+            "condition number",
+            "motion toward a singularity slows here",
+            low=1.0,
+            high=1e6,
+        ),
+        Param(
+            "singularity_halt", 80.0, "condition number", "motion toward a singularity stops here", low=1.0, high=1e6
+        ),
+        Param(
+            "workspace_lower", [-1.2, -1.2, 0.0], "m", "tool target box, robot base frame", length=3, low=-10, high=10
+        ),
+        Param("workspace_upper", [1.2, 1.2, 1.3], "m", "tool target box, robot base frame", length=3, low=-10, high=10),
+        Param("floor_z", 0.02, "m", "the tool target never goes below this height", low=-10.0, high=10.0),
+        Param("engage_ramp_s", 0.3, "s", "speed ramps from 0 after engage or resume", low=0.0, high=10.0),
+        Param(
+            "stale_timeout_s",
+            0.1,
+            "s",
+            "without a fresh command before the robot is halted",
+            low=0.0,
+            high=5.0,
+            low_open=True,
+        ),
+    ]
+)
 
 
 @dataclass
@@ -83,7 +119,7 @@ class SafetyConfig:
     value out of range raises ParameterError when the config is built."""
 
     joint_speed_scale: float = SAFETY_PARAMS.field("joint_speed_scale")
-    joint_acceleration: Optional[float] = SAFETY_PARAMS.field("joint_acceleration")
+    joint_acceleration: float | None = SAFETY_PARAMS.field("joint_acceleration")
     joint_limit_margin: float = SAFETY_PARAMS.field("joint_limit_margin")
     singularity_slowdown: float = SAFETY_PARAMS.field("singularity_slowdown")
     singularity_halt: float = SAFETY_PARAMS.field("singularity_halt")
@@ -96,8 +132,10 @@ class SafetyConfig:
     def __post_init__(self):
         SAFETY_PARAMS.check_fields(self, "SafetyConfig")
         if self.singularity_slowdown >= self.singularity_halt:
-            raise ParameterError(f"singularity_slowdown ({self.singularity_slowdown}) must be below "
-                                 f"singularity_halt ({self.singularity_halt})")
+            raise ParameterError(
+                f"singularity_slowdown ({self.singularity_slowdown}) must be below "
+                f"singularity_halt ({self.singularity_halt})"
+            )
         if any(low >= high for low, high in zip(self.workspace_lower, self.workspace_upper)):
             raise ParameterError("workspace_lower must be below workspace_upper on every axis")
 
@@ -123,37 +161,44 @@ class TeleopCommand:
 class TeleopCore:
     """Clutch, mapping, IK and the safety rules for one robot."""
 
-    def __init__(self, kinematics: RobotKinematics, mapper: TeleopMapper, clutch: AutoClutch,
-                 safety: SafetyConfig = None, limiter: JointStepLimiter = None):
+    def __init__(
+        self,
+        kinematics: RobotKinematics,
+        mapper: TeleopMapper,
+        clutch: AutoClutch,
+        safety: SafetyConfig = None,
+        limiter: JointStepLimiter = None,
+    ):
         self.kinematics = kinematics
         self.mapper = mapper
         self.clutch = clutch
         self.safety = safety or SafetyConfig()
         s = self.safety
-        self.limiter = limiter or JointStepLimiter(kinematics.velocity_limits, s.joint_speed_scale,
-                                                   s.joint_acceleration)
+        self.limiter = limiter or JointStepLimiter(
+            kinematics.velocity_limits, s.joint_speed_scale, s.joint_acceleration
+        )
         self.margin = JointLimitMargin(kinematics.lower, kinematics.upper, s.joint_limit_margin)
         self.singularity = SingularityGuard(s.singularity_slowdown, s.singularity_halt)
         self.fence = WorkspaceFence(s.workspace_lower, s.workspace_upper, s.floor_z)
         self.ramp = EngageRamp(s.engage_ramp_s)
         self.watchdog = StaleCommandWatchdog(s.stale_timeout_s)
         self.status = TeleopStatus.WAITING_FOR_ROBOT
-        self.measured_joints: Optional[np.ndarray] = None
+        self.measured_joints: np.ndarray | None = None
         self.estopped = False
-        self._command: Optional[np.ndarray] = None
+        self._command: np.ndarray | None = None
         # Jacobian condition number and tool pose at _command (None: not known yet); the
         # first is carried from the frame that chose the command, both are filled between
         # frames by prepare_next(), so the next frame does not spend its latency on them.
-        self._command_condition: Optional[float] = None
+        self._command_condition: float | None = None
         self._command_pose = None
         # The previous frame's IK solution (the unlimited goal): the next IK starts there.
-        self._last_goal: Optional[np.ndarray] = None
+        self._last_goal: np.ndarray | None = None
         # That IK's first step at its seed (pose, Jacobian), done by prepare_next() ahead of
         # the frame, and the largest and smallest singular values of that Jacobian; None:
         # not done yet, the frame does without.
         self._prepared_seed = None
         self._seed_extremes = None
-        self._command_stamp: Optional[float] = None
+        self._command_stamp: float | None = None
         self._halted = False
 
     # -- inputs ----------------------------------------------------------------------------
@@ -201,8 +246,9 @@ class TeleopCore:
             return Action.DISENGAGE
         return Action.NONE
 
-    def on_hand_pose(self, stamp: float, position, orientation, hands_num: int = 1,
-                     now: Optional[float] = None) -> Optional[TeleopCommand]:
+    def on_hand_pose(
+        self, stamp: float, position, orientation, hands_num: int = 1, now: float | None = None
+    ) -> TeleopCommand | None:
         """Process one filtered hand pose; return the command to send, if any."""
         now = stamp if now is None else now
         # Plain floats for the checks: numpy's per-call overhead on 3- and 4-vectors costs
@@ -294,14 +340,15 @@ class TeleopCore:
         result = self.kinematics.solve_ik(pin.SE3(rotation, position), seed)
         return self.margin.apply(result.joints)[0] if result.success else goal
 
-    def _command_for(self, stamp, now, position, orientation) -> Optional[TeleopCommand]:
+    def _command_for(self, stamp, now, position, orientation) -> TeleopCommand | None:
         flags = []
         target_position, target_rotation = self.mapper.target_transform(position, orientation)
         target_position, fenced = self.fence.clamp(target_position)
         if fenced:
             flags.append(TeleopStatus.WORKSPACE_LIMIT)
-        result = self.kinematics.solve_ik(pin.SE3(target_rotation, target_position), self._ik_seed(),
-                                          prepared=self._prepared_seed)
+        result = self.kinematics.solve_ik(
+            pin.SE3(target_rotation, target_position), self._ik_seed(), prepared=self._prepared_seed
+        )
         if not result.success:
             self.status = TeleopStatus.IK_FAILED
             return None
@@ -318,8 +365,8 @@ class TeleopCore:
         # slowdown threshold: when the IK solution's is certainly below it (bounded from the
         # seed's, a frame away), full speed is allowed without computing it exactly.
         if seed_extremes is not None and condition_certainly_below(
-                self.kinematics.local_jacobian(joints), seed.local_jacobian, seed_extremes,
-                self.singularity.slowdown):
+            self.kinematics.local_jacobian(joints), seed.local_jacobian, seed_extremes, self.singularity.slowdown
+        ):
             target_condition, singular = None, 1.0
         else:
             target_condition = condition_number(self.kinematics.jacobian(joints))
@@ -354,8 +401,14 @@ class TeleopCore:
         return TeleopCommand(stamp, joints, target_position, target_rotation, self.status)
 
 
-_SEVERITY = [TeleopStatus.SINGULARITY_HALT, TeleopStatus.WORKSPACE_LIMIT, TeleopStatus.JOINT_LIMIT_MARGIN,
-             TeleopStatus.SINGULARITY_SLOWDOWN, TeleopStatus.RAMPING, TeleopStatus.JOINT_SPEED_LIMITED]
+_SEVERITY = [
+    TeleopStatus.SINGULARITY_HALT,
+    TeleopStatus.WORKSPACE_LIMIT,
+    TeleopStatus.JOINT_LIMIT_MARGIN,
+    TeleopStatus.SINGULARITY_SLOWDOWN,
+    TeleopStatus.RAMPING,
+    TeleopStatus.JOINT_SPEED_LIMITED,
+]
 
 
 def _severity(status: TeleopStatus) -> int:

@@ -1,6 +1,7 @@
 """Atomic file writes: a file a user saves (a program, a template, a summary) is either the
 old one or the new one, never truncated or mixed, even if the process is killed mid-write
 or the power fails."""
+
 import os
 import re
 import tempfile
@@ -29,8 +30,9 @@ def _temp_pattern(name: str):
     return re.compile(r"^\." + re.escape(name) + r"\.[A-Za-z0-9_]+\.tmp$")
 
 
-def remove_stale_temp_files(folder: str, name: str = "", older_than_s: float = STALE_TEMP_AGE_S,
-                            now: float = None) -> list:
+def remove_stale_temp_files(
+    folder: str, name: str = "", older_than_s: float = STALE_TEMP_AGE_S, now: float = None
+) -> list:
     """Remove the temporary files that killed writers of ``write_atomic`` left in ``folder``
     (``.NAME.XXXX.tmp``; of one file ``name``, or of every file when empty) once they are
     older than ``older_than_s``; return the paths removed. A missing folder removes nothing."""
@@ -73,7 +75,7 @@ def write_atomic(path: str, text) -> str:
         # mkstemp makes the file owner-only; a saved program or template is a normal file.
         os.fchmod(fd, 0o666 & ~_current_umask())
         binary = isinstance(text, (bytes, bytearray))
-        with (os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8")) as stream:
+        with os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8") as stream:
             stream.write(text)
             stream.flush()
             os.fsync(stream.fileno())

@@ -6,6 +6,7 @@ so that arithmetic runs on plain floats (bench/e2e_latency). Converting an array
 is one tolist() call: iterating it instead yields numpy scalars, several times slower per
 element.
 """
+
 import numpy as np
 
 

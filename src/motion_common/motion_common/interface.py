@@ -17,13 +17,13 @@ Names are relative (``joint_states``, ``motion_sensor/raw_hand``) or private
 (``~finished``), never absolute: a launch file puts a whole stack under a namespace
 (``left/``, ``right/``) and remaps what it must. No ROS import.
 """
+
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Dict, Iterable, List, Sequence, Tuple
 
 from .params import ParamSchema
 
-__all__ = ["Topic", "Service", "NodeInterface", "interfaces_markdown", "resolve", "graph_mismatches",
-           "GRAPH_IGNORED"]
+__all__ = ["Topic", "Service", "NodeInterface", "interfaces_markdown", "resolve", "graph_mismatches", "GRAPH_IGNORED"]
 
 
 @dataclass(frozen=True)
@@ -72,14 +72,18 @@ class NodeInterface:
     node: str
     doc: str
     params: ParamSchema = field(default_factory=lambda: ParamSchema([]))
-    publishes: Tuple[Topic, ...] = ()
-    subscribes: Tuple[Topic, ...] = ()
-    serves: Tuple[Service, ...] = ()
-    calls: Tuple[Service, ...] = ()
+    publishes: tuple[Topic, ...] = ()
+    subscribes: tuple[Topic, ...] = ()
+    serves: tuple[Service, ...] = ()
+    calls: tuple[Service, ...] = ()
 
     def __post_init__(self):
-        for kind, entries in (("publishes", self.publishes), ("subscribes", self.subscribes),
-                              ("serves", self.serves), ("calls", self.calls)):
+        for kind, entries in (
+            ("publishes", self.publishes),
+            ("subscribes", self.subscribes),
+            ("serves", self.serves),
+            ("calls", self.calls),
+        ):
             names = [entry.name for entry in entries]
             twice = sorted({name for name in names if names.count(name) > 1})
             if twice:
@@ -117,24 +121,36 @@ class NodeInterface:
         """This node's section of docs/interfaces.md; a default path under ``root`` is
         shown as ``<project>/...`` so the text is the same in every clone."""
         lines = [f"### `{self.node}` ({self.package})", "", self.doc.strip(), ""]
-        for title, entries in (("Publishes", self.publishes), ("Subscribes", self.subscribes),
-                               ("Serves", self.serves), ("Calls", self.calls)):
+        for title, entries in (
+            ("Publishes", self.publishes),
+            ("Subscribes", self.subscribes),
+            ("Serves", self.serves),
+            ("Calls", self.calls),
+        ):
             if not entries:
                 continue
             lines += [f"{title}:", "", "| name | type | |", "|---|---|---|"]
             for entry in entries:
-                notes = [text for text, on in (("latched", getattr(entry, "latched", False)),
-                                               ("optional", entry.optional)) if on]
+                notes = [
+                    text
+                    for text, on in (("latched", getattr(entry, "latched", False)), ("optional", entry.optional))
+                    if on
+                ]
                 doc = entry.doc + (f" ({', '.join(notes)})" if notes else "")
                 lines.append(f"| `{entry.name}` | `{entry.type}` | {_cell(doc)} |")
             lines.append("")
         if self.params.params:
-            lines += ["Parameters (private, `~name`):", "", "| name | default | unit | range | |",
-                      "|---|---|---|---|---|"]
+            lines += [
+                "Parameters (private, `~name`):",
+                "",
+                "| name | default | unit | range | |",
+                "|---|---|---|---|---|",
+            ]
             for param in self.params.params.values():
                 default = repr(param.default).replace(root, "<project>") if root else repr(param.default)
-                lines.append(f"| `{param.name}` | `{default}` | {param.unit} | {_cell(_range(param))} "
-                             f"| {_cell(param.doc)} |")
+                lines.append(
+                    f"| `{param.name}` | `{default}` | {param.unit} | {_cell(_range(param))} | {_cell(param.doc)} |"
+                )
             lines.append("")
         return "\n".join(lines)
 
@@ -165,13 +181,17 @@ def resolve(name: str, namespace: str, node_name: str) -> str:
 
 def interfaces_markdown(interfaces: Iterable[NodeInterface], title: str = "Node interfaces", root: str = "") -> str:
     """docs/interfaces.md: every node, grouped by package, generated from the declarations."""
-    by_package: Dict[str, List[NodeInterface]] = {}
+    by_package: dict[str, list[NodeInterface]] = {}
     for interface in interfaces:
         by_package.setdefault(interface.package, []).append(interface)
-    lines = [f"# {title}", "",
-             "Generated from each package's `interfaces.py` by `scripts/gen_interfaces`; do not edit by hand "
-             "(`tests/unit` fails when this file is stale). Names are relative: a session launched under a "
-             "namespace (e.g. `left/`) prefixes every one of them; `~name` is private to the node.", ""]
+    lines = [
+        f"# {title}",
+        "",
+        "Generated from each package's `interfaces.py` by `scripts/gen_interfaces`; do not edit by hand "
+        "(`tests/unit` fails when this file is stale). Names are relative: a session launched under a "
+        "namespace (e.g. `left/`) prefixes every one of them; `~name` is private to the node.",
+        "",
+    ]
     for package in sorted(by_package):
         lines += [f"## {package}", ""]
         for interface in sorted(by_package[package], key=lambda i: i.node):
@@ -185,7 +205,7 @@ GRAPH_IGNORED = ("/rosout", "/tf", "/tf_static")
 _LOGGER_SERVICES = ("/get_loggers", "/set_logger_level")
 
 
-def graph_mismatches(interface: NodeInterface, node_name: str, system_state, remaps=None) -> List[str]:
+def graph_mismatches(interface: NodeInterface, node_name: str, system_state, remaps=None) -> list[str]:
     """What a running node ``node_name`` (fully qualified, e.g. ``/left/sequencer``) does
     differently from its declaration, given the master's ``getSystemState()`` answer
     (publishers, subscribers, services: lists of [name, [node, ...]]) and the launch
@@ -195,11 +215,16 @@ def graph_mismatches(interface: NodeInterface, node_name: str, system_state, rem
     remaps = remaps or {}
     namespace = node_name.rsplit("/", 1)[0] or "/"
     problems = []
-    for kind, state, entries in (("publishes", system_state[0], interface.publishes),
-                                 ("subscribes", system_state[1], interface.subscribes),
-                                 ("serves", system_state[2], interface.serves)):
-        actual = {name for name, nodes in state if node_name in nodes and name not in GRAPH_IGNORED
-                  and not name.endswith(_LOGGER_SERVICES)}
+    for kind, state, entries in (
+        ("publishes", system_state[0], interface.publishes),
+        ("subscribes", system_state[1], interface.subscribes),
+        ("serves", system_state[2], interface.serves),
+    ):
+        actual = {
+            name
+            for name, nodes in state
+            if node_name in nodes and name not in GRAPH_IGNORED and not name.endswith(_LOGGER_SERVICES)
+        }
         expected = {resolve(remaps.get(entry.name, entry.name), namespace, node_name): entry for entry in entries}
         undeclared = sorted(actual - set(expected))
         missing = sorted(name for name, entry in expected.items() if not entry.optional and name not in actual)

@@ -1,9 +1,9 @@
 """Robot kinematics from a URDF with pinocchio: forward kinematics, Jacobians and
 damped-least-squares inverse kinematics warm-started from the current joints."""
+
 import math
 import os
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 import pinocchio as pin
@@ -78,7 +78,7 @@ class LinePath:
     joints: np.ndarray
     distance: float
     angle: float
-    failed_at: Optional[float] = None
+    failed_at: float | None = None
     ik_error: float = 0.0
 
     @property
@@ -179,9 +179,16 @@ class RobotKinematics:
         q = self._clipped_to_limits(seed)
         return PreparedSeed(q, self.forward(q), self.local_jacobian(q))
 
-    def solve_ik(self, target: pin.SE3, seed, max_iterations: int = 50, position_tolerance: float = 1e-4,
-                 rotation_tolerance: float = 1e-3, damping: float = 1e-4,
-                 prepared: Optional[PreparedSeed] = None) -> IkResult:
+    def solve_ik(
+        self,
+        target: pin.SE3,
+        seed,
+        max_iterations: int = 50,
+        position_tolerance: float = 1e-4,
+        rotation_tolerance: float = 1e-3,
+        damping: float = 1e-4,
+        prepared: PreparedSeed | None = None,
+    ) -> IkResult:
         """Damped-least-squares IK toward ``target`` starting at ``seed`` (warm start).
 
         Each step is clipped to the joint limits, so the result is always inside them; when
@@ -199,7 +206,7 @@ class RobotKinematics:
         damping_eye = self._damping_eyes.get(damping)
         if damping_eye is None:
             damping_eye = self._damping_eyes[damping] = damping * np.eye(6)
-        position_limit, rotation_limit = position_tolerance ** 2, rotation_tolerance ** 2
+        position_limit, rotation_limit = position_tolerance**2, rotation_tolerance**2
         error = np.zeros(6)
         for iteration in range(max_iterations + 1):
             if prepared is None or iteration:
@@ -224,8 +231,14 @@ class RobotKinematics:
             q = np.minimum(np.maximum(pin.integrate(model, q, step), lower), upper)
         return IkResult(q, False, float(np.linalg.norm(error[:3])), float(np.linalg.norm(error[3:])), max_iterations)
 
-    def line_path(self, start_joints, goal_position, goal_orientation, max_step: float = 0.005,
-                  max_angle_step: float = np.radians(2.0)) -> LinePath:
+    def line_path(
+        self,
+        start_joints,
+        goal_position,
+        goal_orientation,
+        max_step: float = 0.005,
+        max_angle_step: float = np.radians(2.0),
+    ) -> LinePath:
         """Joint waypoints of a straight tool line from ``start_joints`` to the goal pose,
         orientation slerped: one IK solve (warm-started from the previous one) per
         ``max_step`` m / ``max_angle_step`` rad, so the joint-space chords stay close to the

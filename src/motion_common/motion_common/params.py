@@ -8,11 +8,13 @@ and returns a complete dict with defaults filled in. Anything wrong stops the no
 error too, listing the valid keys, so a misspelt safety setting never silently leaves its
 default in force. No ROS import: ``motion_common.ros_params`` reads the parameter server.
 """
+
 import copy
 import dataclasses
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any, Dict, Iterable, Optional, Sequence, Tuple
+from typing import Any, Optional
 
 from .errors import ParameterError
 
@@ -35,13 +37,13 @@ class Param:
     default: Any
     unit: str = ""
     doc: str = ""
-    low: Optional[float] = None
-    high: Optional[float] = None
+    low: float | None = None
+    high: float | None = None
     low_open: bool = False
-    choices: Optional[Tuple[str, ...]] = None
-    length: Optional[int] = None
+    choices: tuple[str, ...] | None = None
+    length: int | None = None
     item_kind: type = float
-    kind: Optional[type] = None
+    kind: type | None = None
     schema: Optional["ParamSchema"] = None
     nullable: bool = False
 
@@ -147,7 +149,7 @@ class ParamSchema:
     """
 
     def __init__(self, params: Sequence[Param], ignore: Iterable[str] = ()):
-        self.params: Dict[str, Param] = {}
+        self.params: dict[str, Param] = {}
         for param in params:
             if param.name in self.params:
                 raise ValueError(f"parameter {param.name!r} declared twice")
@@ -155,20 +157,22 @@ class ParamSchema:
             self.params[param.name] = param
         self.ignore = frozenset(ignore)
 
-    def defaults(self) -> Dict[str, Any]:
+    def defaults(self) -> dict[str, Any]:
         """Every parameter at its default."""
         return {name: param.default for name, param in self.params.items()}
 
-    def validate(self, values: Optional[dict], source: str) -> Dict[str, Any]:
+    def validate(self, values: dict | None, source: str) -> dict[str, Any]:
         """Checked values with defaults filled in; raise ParameterError on anything wrong."""
         values = {} if values is None else values
         if not isinstance(values, dict):
             raise ParameterError(f"{source}: expected a mapping of parameters, got {values!r}")
         unknown = sorted(set(values) - set(self.params) - self.ignore)
         if unknown:
-            raise ParameterError(f"{source}: unknown parameter '{unknown[0]}'"
-                                 + (f" (and {unknown[1:]})" if len(unknown) > 1 else "")
-                                 + f"; valid keys: {sorted(self.params)}")
+            raise ParameterError(
+                f"{source}: unknown parameter '{unknown[0]}'"
+                + (f" (and {unknown[1:]})" if len(unknown) > 1 else "")
+                + f"; valid keys: {sorted(self.params)}"
+            )
         result = self.defaults()
         for name, value in values.items():
             if name in self.params:
@@ -185,7 +189,7 @@ class ParamSchema:
         copy of the value in the dataclass)."""
         return dataclasses.field(default_factory=lambda: self.default(name))
 
-    def check_fields(self, config, source: str, names: Optional[Dict[str, str]] = None) -> None:
+    def check_fields(self, config, source: str, names: dict[str, str] | None = None) -> None:
         """Check a typed config's fields against their declarations (ParameterError naming
         ``source`` and the key). ``names`` maps a field to its parameter where they differ;
         fields that are not parameters are skipped."""
@@ -208,6 +212,7 @@ def read_yaml_file(path: str):
     """The content of a YAML parameter file; ParameterError naming the file if it cannot be
     read or parsed (a node then stops with that message)."""
     import yaml  # here, not at the top: the validator itself needs no YAML
+
     try:
         with open(path, encoding="utf-8") as stream:
             return yaml.safe_load(stream)
@@ -223,5 +228,6 @@ def check_ordered(values: dict, pairs, source: str) -> None:
     (inverted thresholds make a state chatter on and off every frame)."""
     for low, high in pairs:
         if values[low] > values[high]:
-            raise ParameterError(f"{source}: parameter '{low}' ({values[low]!r}) must not exceed '{high}' "
-                                 f"({values[high]!r})")
+            raise ParameterError(
+                f"{source}: parameter '{low}' ({values[low]!r}) must not exceed '{high}' ({values[high]!r})"
+            )

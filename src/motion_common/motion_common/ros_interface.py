@@ -6,6 +6,7 @@ type and the latch come from the declaration, so a node can neither use a name i
 declare nor disagree with the docs about a type. Names stay relative; the launch file's
 namespace and remaps place them.
 """
+
 from __future__ import annotations
 
 import roslib.message
@@ -40,8 +41,7 @@ def load_params(node: NodeInterface) -> dict:
 def publisher(node: NodeInterface, name: str, queue_size=10, **kwargs) -> rospy.Publisher:
     """A publisher of the declared topic ``name`` (type and latch from the declaration)."""
     topic = node.published(name)
-    return rospy.Publisher(topic.name, message_class(topic.type), queue_size=queue_size,
-                           latch=topic.latched, **kwargs)
+    return rospy.Publisher(topic.name, message_class(topic.type), queue_size=queue_size, latch=topic.latched, **kwargs)
 
 
 def subscriber(node: NodeInterface, name: str, callback, queue_size=10, **kwargs) -> rospy.Subscriber:

@@ -4,6 +4,7 @@ The ROS edge of ``motion_common.params``: a node calls ``load_private_params(sch
 once at start-up; a bad or unknown key logs a fatal message naming the file (the
 ``~config_file`` parameter the launch file sets, else the node's namespace) and exits.
 """
+
 import rospy
 
 from .errors import ParameterError

@@ -1,4 +1,5 @@
 """The start-up heap of a latency-critical node, kept out of the garbage collector's scans."""
+
 import gc
 
 

@@ -1,6 +1,6 @@
 """HandSample: the ROS-free form of one motion_sensor/hand message."""
+
 from dataclasses import dataclass, field
-from typing import Optional, Tuple
 
 import numpy as np
 
@@ -23,7 +23,7 @@ class HandSample:
     position: np.ndarray
     orientation: np.ndarray
     hands_num: int = 1
-    hand_types: Tuple[str, ...] = ("right",)
+    hand_types: tuple[str, ...] = ("right",)
     frame_id: str = "leap"
     hand_id: int = -1
     device: str = ""
@@ -31,7 +31,7 @@ class HandSample:
     confidence: float = -1.0
     grab_strength: float = -1.0
     pinch_strength: float = -1.0
-    index_tip: Optional[np.ndarray] = None
+    index_tip: np.ndarray | None = None
 
     @property
     def primary_type(self) -> str:

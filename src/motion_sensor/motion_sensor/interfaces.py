@@ -6,9 +6,9 @@ The device nodes share one wrapper (``device_interface``); the device classes ar
 only by ``device_nodes()``, so a node that needs one declaration does not load every
 device's libraries. No ROS import.
 """
+
 from motion_common.interface import NodeInterface, Topic
 from motion_common.params import Param, ParamSchema
-
 from motion_sensor.devices.device_interface import device_interface
 from motion_sensor.gestures.gesture_recognizer import RECOGNIZER_PARAMS
 from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS
@@ -18,7 +18,8 @@ __all__ = ["SEQUENCER", "GESTURE_RECOGNIZER", "RECORD_HANDS", "REGISTRATION_TF",
 _HAND = "motion_sensor/hand"
 
 SEQUENCER = NodeInterface(
-    "motion_sensor", "sequencer",
+    "motion_sensor",
+    "sequencer",
     "Cleans the device hand streams (validation, device binding, timing, trims, jump rejection, filter) and "
     "publishes the motion commands. One input `~input` by default (remapped to `motion_sensor/raw_hand`); "
     "with `~inputs`, one subscription per listed device topic instead.",
@@ -26,22 +27,29 @@ SEQUENCER = NodeInterface(
     publishes=(
         Topic("motion_sensor/hand", _HAND, "the filtered hand, sensor stamp kept, gesture fields passed through"),
         Topic("motion_states", "geometry_msgs/Pose", "the paper's output: the filtered palm pose"),
-        Topic("motion_states_stamped", "geometry_msgs/PoseStamped", "the same pose with the sensor stamp "
-              "(the core's input)"),
+        Topic(
+            "motion_states_stamped",
+            "geometry_msgs/PoseStamped",
+            "the same pose with the sensor stamp (the core's input)",
+        ),
         Topic("motion_sensor/active_device", "std_msgs/String", "the device that drives", latched=True),
         Topic("motion_sensor/filter", "std_msgs/String", "the active filter", latched=True),
         Topic("diagnostics", "diagnostic_msgs/DiagnosticArray", "counters by drop reason and latency, 1 Hz"),
     ),
     subscribes=(
         Topic("~input", _HAND, "the device stream (when `~inputs` is unset)", optional=True),
-        Topic("motion_controller/trace", "motion_commander/CommandTrace", "commands the robot accepted: "
-              "older frames are outdated"),
+        Topic(
+            "motion_controller/trace",
+            "motion_commander/CommandTrace",
+            "commands the robot accepted: older frames are outdated",
+        ),
         Topic("motion_sensor/set_filter", "std_msgs/String", "switch the filter live (output kept continuous)"),
     ),
 )
 
 GESTURE_RECOGNIZER = NodeInterface(
-    "motion_sensor", "gesture_recognizer",
+    "motion_sensor",
+    "gesture_recognizer",
     "Recognises static poses and dynamic (DTW template) gestures in the filtered hand stream.",
     RECOGNIZER_PARAMS,
     publishes=(Topic("motion_sensor/gesture", "motion_sensor/Gesture", "every recognised gesture, sensor stamp"),),
@@ -49,26 +57,37 @@ GESTURE_RECOGNIZER = NodeInterface(
 )
 
 RECORD_HANDS = NodeInterface(
-    "motion_sensor", "record_hands",
+    "motion_sensor",
+    "record_hands",
     "Records hand streams to a rosbag until shutdown (`~topics`, relative names).",
-    ParamSchema([
-        Param("output", "hands.bag", doc="rosbag path (~ expanded); its folder is created"),
-        Param("topics", ["motion_sensor/raw_hand", "motion_sensor/hand"], item_kind=str,
-              doc="motion_sensor/hand topics recorded"),
-    ]),
-    subscribes=(Topic("motion_sensor/raw_hand", _HAND, "recorded (default `~topics`)", optional=True),
-                Topic("motion_sensor/hand", _HAND, "recorded (default `~topics`)", optional=True)),
+    ParamSchema(
+        [
+            Param("output", "hands.bag", doc="rosbag path (~ expanded); its folder is created"),
+            Param(
+                "topics",
+                ["motion_sensor/raw_hand", "motion_sensor/hand"],
+                item_kind=str,
+                doc="motion_sensor/hand topics recorded",
+            ),
+        ]
+    ),
+    subscribes=(
+        Topic("motion_sensor/raw_hand", _HAND, "recorded (default `~topics`)", optional=True),
+        Topic("motion_sensor/hand", _HAND, "recorded (default `~topics`)", optional=True),
+    ),
 )
 
 REGISTRATION_TF = NodeInterface(
-    "motion_sensor", "registration_tf",
-    "Publishes a device registration (register_device's YAML) as a static tf from the robot base to the device "
-    "frame.",
-    ParamSchema([
-        Param("registration_file", "", doc="register_device's YAML (required)"),
-        Param("parent", "base_link", doc="robot base frame"),
-        Param("child", "leap", doc="device frame"),
-    ]),
+    "motion_sensor",
+    "registration_tf",
+    "Publishes a device registration (register_device's YAML) as a static tf from the robot base to the device frame.",
+    ParamSchema(
+        [
+            Param("registration_file", "", doc="register_device's YAML (required)"),
+            Param("parent", "base_link", doc="robot base frame"),
+            Param("child", "leap", doc="device frame"),
+        ]
+    ),
 )
 
 
@@ -83,13 +102,18 @@ def device_nodes():
     from motion_sensor.devices.spacemouse import SpaceMouseDevice
     from motion_sensor.devices.webcam_device import WebcamHandDevice
 
-    kinect = device_interface(FakenectKinectDevice, "kinect_driver",
-                              "A Kinect v1 through libfreenect, or a fakenect dump (`~fakenect_dump`, finite).")
-    kinect = replace(kinect, publishes=tuple(replace(t, optional=True) if t.name == "~finished" else t
-                                             for t in kinect.publishes))
+    kinect = device_interface(
+        FakenectKinectDevice,
+        "kinect_driver",
+        "A Kinect v1 through libfreenect, or a fakenect dump (`~fakenect_dump`, finite).",
+    )
+    kinect = replace(
+        kinect, publishes=tuple(replace(t, optional=True) if t.name == "~finished" else t for t in kinect.publishes)
+    )
     webcam = device_interface(WebcamHandDevice, "webcam_hand_driver")
-    webcam = replace(webcam, publishes=tuple(replace(t, optional=True) if t.name == "~finished" else t
-                                             for t in webcam.publishes))
+    webcam = replace(
+        webcam, publishes=tuple(replace(t, optional=True) if t.name == "~finished" else t for t in webcam.publishes)
+    )
     return [
         device_interface(LeapDevice, "leap_driver"),
         device_interface(SpaceMouseDevice, "spacemouse_driver"),

@@ -3,11 +3,11 @@
 This is the only module of the package that touches ROS message classes (not rospy); the
 nodes use it at the edges.
 """
+
 import numpy as np
 
-from motion_sensor.msg import hand
-
 from motion_sensor.hand_sample import HandSample
+from motion_sensor.msg import hand
 
 
 def sample_to_msg(sample: HandSample) -> hand:
@@ -32,9 +32,17 @@ def sample_to_msg(sample: HandSample) -> hand:
 def msg_to_sample(msg: hand, device: str = "") -> HandSample:
     """HandSample of a motion_sensor/hand message (stamp in seconds)."""
     p, o, tip = msg.position, msg.orientation, msg.index_tip
-    return HandSample(stamp=msg.header.stamp.to_sec(), position=np.array([p.x, p.y, p.z]),
-                      orientation=np.array([o.x, o.y, o.z, o.w]), hands_num=msg.hands_num,
-                      hand_types=tuple(msg.hand_type), frame_id=msg.header.frame_id, device=device,
-                      hand_id=msg.hand_id, confidence=msg.confidence, grab_strength=msg.grab_strength,
-                      pinch_strength=msg.pinch_strength,
-                      index_tip=np.array([tip.x, tip.y, tip.z]) if msg.index_tip_known else None)
+    return HandSample(
+        stamp=msg.header.stamp.to_sec(),
+        position=np.array([p.x, p.y, p.z]),
+        orientation=np.array([o.x, o.y, o.z, o.w]),
+        hands_num=msg.hands_num,
+        hand_types=tuple(msg.hand_type),
+        frame_id=msg.header.frame_id,
+        device=device,
+        hand_id=msg.hand_id,
+        confidence=msg.confidence,
+        grab_strength=msg.grab_strength,
+        pinch_strength=msg.pinch_strength,
+        index_tip=np.array([tip.x, tip.y, tip.z]) if msg.index_tip_known else None,
+    )

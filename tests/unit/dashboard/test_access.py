@@ -1,12 +1,20 @@
 """The dashboard answers only its own page: Host and Origin checks (against DNS
 rebinding), token strength and where the token comes from."""
+
 import asyncio
 import os
 
 import pytest
 
-from dashboard.access import (HostOriginGuard, allowed_hosts, check_access_config, host_allowed, load_token,
-                              origin_allowed, token_strength)
+from dashboard.access import (
+    HostOriginGuard,
+    allowed_hosts,
+    check_access_config,
+    host_allowed,
+    load_token,
+    origin_allowed,
+    token_strength,
+)
 from motion_common.errors import ParameterError
 
 LOCAL = allowed_hosts("127.0.0.1")
@@ -17,8 +25,18 @@ def test_loopback_names_are_answered(header):
     assert host_allowed(header, LOCAL)
 
 
-@pytest.mark.parametrize("header", ["evil.example:8080", "evil.example", "127.0.0.1.evil.example:8080", "",
-                                    None, "127.0.0.1:notaport", "10.0.0.5:8080"])
+@pytest.mark.parametrize(
+    "header",
+    [
+        "evil.example:8080",
+        "evil.example",
+        "127.0.0.1.evil.example:8080",
+        "",
+        None,
+        "127.0.0.1:notaport",
+        "10.0.0.5:8080",
+    ],
+)
 def test_foreign_or_malformed_hosts_are_refused(header):
     assert not host_allowed(header, LOCAL)
 
@@ -74,7 +92,7 @@ def test_weak_tokens_are_refused():
     for weak in ("a" * 16, "aaaaaaaabbbbbbbb", "password12345678"[:10], "abababababababababab"):
         with pytest.raises(ParameterError, match="too weak"):
             check_access_config("0.0.0.0", weak)
-    check_access_config("0.0.0.0", "0123456789abcdef")      # 16 hex digits: 64 bits
+    check_access_config("0.0.0.0", "0123456789abcdef")  # 16 hex digits: 64 bits
     assert token_strength("a" * 16) < 64 <= token_strength(os.urandom(16).hex())
 
 

@@ -1,12 +1,20 @@
 """The dashboard's control rules (what is disabled, and the reason shown) and its access rule."""
+
 import pytest
 
 from dashboard.access import check_access_config, token_accepted
 from dashboard.controls import control_states
 from motion_common.errors import ParameterError
 
-RUNNING = {"status": 2, "engage_mode": "auto", "stop_latched": False, "server_up": True, "speed_ratio": 1.0,
-           "filter": "mean", "kitting_cell": False}
+RUNNING = {
+    "status": 2,
+    "engage_mode": "auto",
+    "stop_latched": False,
+    "server_up": True,
+    "speed_ratio": 1.0,
+    "filter": "mean",
+    "kitting_cell": False,
+}
 
 
 def states(**changes):
@@ -32,13 +40,16 @@ def test_replay_disabled_while_teleop_is_engaged_with_the_reason():
     assert states(selected_program="pick", status=12)["replay"].reason.startswith("teleop is engaged")
 
 
-@pytest.mark.parametrize("change, words", [
-    ({}, "select a program"),
-    ({"selected_program": "p", "status": 1, "stop_latched": True}, "latched"),
-    ({"selected_program": "p", "status": 1, "server_up": False}, "no robot server"),
-    ({"selected_program": "p", "status": 1, "program_job": True}, "in progress"),
-    ({"selected_program": "p", "status": 1, "campaign_job": True}, "campaign"),
-])
+@pytest.mark.parametrize(
+    "change, words",
+    [
+        ({}, "select a program"),
+        ({"selected_program": "p", "status": 1, "stop_latched": True}, "latched"),
+        ({"selected_program": "p", "status": 1, "server_up": False}, "no robot server"),
+        ({"selected_program": "p", "status": 1, "program_job": True}, "in progress"),
+        ({"selected_program": "p", "status": 1, "campaign_job": True}, "campaign"),
+    ],
+)
 def test_replay_reasons(change, words):
     replay = states(**change)["replay"]
     assert not replay.enabled and words in replay.reason

@@ -1,4 +1,5 @@
 """The dashboard's child jobs (output kept, SIGINT end) and the programs folder (list, delete)."""
+
 import os
 import sys
 import time
@@ -18,13 +19,15 @@ def test_job_keeps_output_and_exit_code():
 
 
 def test_job_stop_sends_sigint_so_the_child_can_report():
-    code = ("import signal, sys, time\n"
-            "def bye(*_):\n    print('interrupted, reporting', flush=True); sys.exit(7)\n"
-            "signal.signal(signal.SIGINT, bye)\nprint('ready', flush=True)\n"
-            "while True: time.sleep(0.05)\n")
+    code = (
+        "import signal, sys, time\n"
+        "def bye(*_):\n    print('interrupted, reporting', flush=True); sys.exit(7)\n"
+        "signal.signal(signal.SIGINT, bye)\nprint('ready', flush=True)\n"
+        "while True: time.sleep(0.05)\n"
+    )
     job = Job("t", [sys.executable, "-c", code])
     deadline = time.monotonic() + 30
-    while not job.lines() and time.monotonic() < deadline:   # wait for readiness, not a fixed sleep
+    while not job.lines() and time.monotonic() < deadline:  # wait for readiness, not a fixed sleep
         time.sleep(0.01)
     assert job.stop(timeout=30) == 7
     assert job.lines() == ["ready", "interrupted, reporting"]
@@ -32,7 +35,14 @@ def test_job_stop_sends_sigint_so_the_child_can_report():
 
 def test_commands():
     assert run_program_command("/p/a.yaml", True, "/s.yaml") == [
-        "rosrun", "motion_apps", "run_program", "/p/a.yaml", "--dry-run", "--scene", "/s.yaml"]
+        "rosrun",
+        "motion_apps",
+        "run_program",
+        "/p/a.yaml",
+        "--dry-run",
+        "--scene",
+        "/s.yaml",
+    ]
     assert run_program_command("/p/a.yaml", False) == ["rosrun", "motion_apps", "run_program", "/p/a.yaml"]
     command = campaign_command(6, 2, True, "/out")
     assert command[:3] == ["rosrun", "kitting", "kitting_trials"]

@@ -1,12 +1,14 @@
 """Every session launch offers the dashboard: dashboard, dashboard_port, dashboard_host and
 dashboard_token arguments, and launch/dashboard.launch included only with dashboard:=true
 (directly, or through the session launch it includes)."""
+
 import os
 import xml.etree.ElementTree as ET
 
 import pytest
 
 from ..conftest import ROOT
+
 SESSIONS = ["teleop_sim.launch", "teleop_ur.launch", "teach_sim.launch", "kitting_sim.launch", "kitting_ur.launch"]
 ARGS = {"dashboard": "false", "dashboard_port": "8080", "dashboard_host": "127.0.0.1", "dashboard_token": ""}
 
@@ -28,9 +30,10 @@ def test_dashboard_is_included_only_when_asked(name):
     if direct:
         assert [inc.get("if") for inc in direct] == ["$(arg dashboard)"]
         passed = {arg.get("name"): arg.get("value") for arg in direct[0].findall("arg")}
-    else:   # through the session launch it wraps, with dashboard passed on
-        wrapped = [inc for inc in root.findall("include")
-                   if any(arg.get("name") == "dashboard" for arg in inc.findall("arg"))]
+    else:  # through the session launch it wraps, with dashboard passed on
+        wrapped = [
+            inc for inc in root.findall("include") if any(arg.get("name") == "dashboard" for arg in inc.findall("arg"))
+        ]
         assert wrapped, f"{name} neither includes dashboard.launch nor passes dashboard on"
         passed = {arg.get("name"): arg.get("value") for arg in wrapped[0].findall("arg")}
     for key in ("dashboard_port", "dashboard_host", "dashboard_token"):

@@ -1,5 +1,6 @@
 """Dashboard state without ROS or a browser: the store, the plot's path buffer, latency
 percentiles, readings of diagnostics and the status names and colours."""
+
 import threading
 
 import numpy as np
@@ -29,7 +30,7 @@ def test_snapshot_copies_values_and_reports_ages():
     snap = state.snapshot()
     assert snap["values"]["status"] == 2 and snap["values"]["speed_ratio"] == 0.5
     assert snap["ages"]["hands"] == pytest.approx(2.5) and snap["ages"]["status"] == pytest.approx(0.0)
-    snap["values"]["hands"]["types"].append("left")           # a snapshot is a copy
+    snap["values"]["hands"]["types"].append("left")  # a snapshot is a copy
     assert state.get("hands")["types"] == ["right"]
     assert state.age("never") is None and snap["latency_ms"] is None
 
@@ -60,9 +61,9 @@ def test_concurrent_writers_and_readers_never_see_a_torn_state():
 def test_path_buffer_thins_bounds_and_converts_to_mm():
     paths = PathBuffer(max_points=5, min_interval_s=1.0)
     kept = [paths.add("tool", 0.25 * i, (0.001 * i, 0.002 * i, 0.3)) for i in range(100)]  # exact binary times
-    assert sum(kept) == 25                                     # every 4th point: 4 Hz -> 1 Hz
+    assert sum(kept) == 25  # every 4th point: 4 Hz -> 1 Hz
     series = paths.series()
-    assert len(series["tool"]) == 5 and series["hand"] == []   # only the newest 5 stay
+    assert len(series["tool"]) == 5 and series["hand"] == []  # only the newest 5 stay
     np.testing.assert_allclose(series["tool"][-1], [96.0, 192.0])
     paths.clear()
     assert paths.series()["tool"] == []
@@ -76,14 +77,21 @@ def test_latency_window_percentiles_over_the_last_commands():
     for value in [0.5] * 50 + list(np.linspace(0.001, 0.002, 100)) + [float("nan"), -1.0]:
         window.add(value)
     p50, p99, count = window.percentiles_ms()
-    assert count == 100                                        # the 0.5 s ones fell out, bad values ignored
+    assert count == 100  # the 0.5 s ones fell out, bad values ignored
     assert p50 == pytest.approx(1.5, abs=0.01) and p99 == pytest.approx(1.99, abs=0.01)
 
 
 def test_sequencer_counters_from_diagnostics():
-    values = [("frames_in", "367"), ("frames_out", "357"), ("dropped_entry_trim", "10"), ("dropped_jump", "2"),
-              ("dropped_total", "12"), ("active_device", "default"), ("latency_p50_ms", "0.9"),
-              ("dropped_stale", "not a number")]
+    values = [
+        ("frames_in", "367"),
+        ("frames_out", "357"),
+        ("dropped_entry_trim", "10"),
+        ("dropped_jump", "2"),
+        ("dropped_total", "12"),
+        ("active_device", "default"),
+        ("latency_p50_ms", "0.9"),
+        ("dropped_stale", "not a number"),
+    ]
     counters = sequencer_counters(values)
     assert counters["frames_in"] == 367 and counters["frames_out"] == 357 and counters["dropped_total"] == 12
     assert counters["drops"] == {"entry_trim": 10, "jump": 2}
@@ -93,14 +101,20 @@ def test_sequencer_counters_from_diagnostics():
 def test_driver_status_reading():
     values = [("connected", "True"), ("fault", ""), ("protective_stop", "False"), ("stop_latched", "True")]
     status = driver_status(values, "stop latched by dashboard", 1)
-    assert status == {"connected": True, "fault": "", "protective_stop": False, "stop_latched": True,
-                      "message": "stop latched by dashboard", "level": 1}
+    assert status == {
+        "connected": True,
+        "fault": "",
+        "protective_stop": False,
+        "stop_latched": True,
+        "message": "stop latched by dashboard",
+        "level": 1,
+    }
     assert driver_status([("fault", "overcurrent")], "", 2)["connected"] is None
 
 
 def test_tool_reading_in_mm_and_degrees():
     half = np.sqrt(0.5)
-    reading = tool_reading((0.4, -0.1, 0.25), (0.0, 0.0, half, half))      # 90 deg about z
+    reading = tool_reading((0.4, -0.1, 0.25), (0.0, 0.0, half, half))  # 90 deg about z
     np.testing.assert_allclose(reading["xyz_mm"], [400.0, -100.0, 250.0])
     np.testing.assert_allclose(reading["rpy_deg"], [0.0, 0.0, 90.0], atol=1e-9)
 

@@ -1,4 +1,5 @@
 """Every driver honours the template the same way; the sim's gripper and scene; plugins."""
+
 import sys
 import time
 
@@ -6,12 +7,13 @@ import numpy as np
 import pybullet
 import pytest
 
-from ..conftest import HOME, UR5E
-from hw_interface.testing.fake_rtde import FakeUR
 from hw_interface.registry import available_drivers, create_driver
 from hw_interface.robot_hw import RobotDriver
 from hw_interface.sim_driver import PybulletSimDriver
+from hw_interface.testing.fake_rtde import FakeUR
 from hw_interface.ur_driver import URRtdeDriver
+
+from ..conftest import HOME, UR5E
 
 
 def sim_driver():
@@ -51,8 +53,10 @@ def test_driver_follows_the_template(factory):
 
 
 def test_suction_gripper_picks_and_places_a_scene_box():
-    scene = [{"name": "floor", "urdf": "plane.urdf", "fixed": True},
-             {"name": "part", "box": [0.02, 0.02, 0.02], "mass": 0.1, "position": [-0.49, -0.13, 0.02]}]
+    scene = [
+        {"name": "floor", "urdf": "plane.urdf", "fixed": True},
+        {"name": "part", "box": [0.02, 0.02, 0.02], "mass": 0.1, "position": [-0.49, -0.13, 0.02]},
+    ]
     sim = PybulletSimDriver(UR5E, initial_joints=HOME, real_time=False, scene=scene)
     sim.login()
     try:
@@ -80,7 +84,8 @@ def test_suction_gripper_picks_and_places_a_scene_box():
 def test_plugin_driver_is_found_through_its_entry_point(tmp_path, monkeypatch):
     (tmp_path / "my_robot_driver.py").write_text(
         "from hw_interface.sim_driver import PybulletSimDriver\n"
-        "class MyDriver(PybulletSimDriver):\n    name = 'my_robot'\n")
+        "class MyDriver(PybulletSimDriver):\n    name = 'my_robot'\n"
+    )
     dist = tmp_path / "my_robot_driver-1.0.dist-info"
     dist.mkdir()
     (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: my-robot-driver\nVersion: 1.0\n")
@@ -118,14 +123,16 @@ def test_sim_state_is_read_once_per_physics_step_and_never_stale():
 
         def pybullet_joints():
             return np.array([s[0] for s in sim._client.getJointStates(sim._body, sim._joint_indices)])
+
         stamp, joints = sim.joint_sample()
         np.testing.assert_array_equal(joints, pybullet_joints())
         joints[:] = 99.0  # a caller changing its copy must not change the cache
         assert sim.joint_sample() == (stamp, pytest.approx(pybullet_joints()))
         position, orientation = sim.get_robot_cartesian_position()
         # A new step invalidates both caches.
-        sim._client.setJointMotorControlArray(sim._body, sim._joint_indices, pybullet.VELOCITY_CONTROL,
-                                              targetVelocities=[1.0] * 6, forces=[500.0] * 6)
+        sim._client.setJointMotorControlArray(
+            sim._body, sim._joint_indices, pybullet.VELOCITY_CONTROL, targetVelocities=[1.0] * 6, forces=[500.0] * 6
+        )
         sim._client.stepSimulation()
         with sim._lock:
             sim.steps += 1

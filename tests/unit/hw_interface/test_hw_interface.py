@@ -1,4 +1,5 @@
 """commander.srv tables, request validation and the pybullet driver behind the dispatcher."""
+
 import os
 import re
 import time
@@ -6,13 +7,14 @@ import time
 import numpy as np
 import pytest
 
-from ..conftest import HOME, ROOT, UR5E
 from hw_interface.dispatcher import CommandDispatcher, Workspace
 from hw_interface.errors import HwInterfaceError
 from hw_interface.protocol import CommandIndex, Result
 from hw_interface.registry import available_drivers, create_driver, register_driver
 from hw_interface.robot_hw import DriverStatus, RobotDriver
 from hw_interface.sim_driver import PybulletSimDriver
+
+from ..conftest import HOME, ROOT, UR5E
 
 SRV = os.path.join(ROOT, "src", "motion_commander", "srv", "commander.srv")
 
@@ -29,12 +31,23 @@ def test_python_tables_match_the_srv_file():
 
 def test_srv_fields_are_table_2():
     request, response = (part.strip().splitlines() for part in open(SRV, encoding="utf-8").read().split("---"))
-    fields = lambda lines: [l.split("#")[0].strip() for l in lines if l.strip() and not l.startswith("#")
-                            and "=" not in l]
-    assert fields(request) == ["uint8 command_index", "std_msgs/Header header", "float32[] position",
-                               "float32[] orientation", "float32[] joints"]
-    assert fields(response) == ["uint8 result", "std_msgs/Header header", "float32[] position",
-                                "float32[] orientation", "float32[] joints"]
+    fields = lambda lines: [
+        l.split("#")[0].strip() for l in lines if l.strip() and not l.startswith("#") and "=" not in l
+    ]
+    assert fields(request) == [
+        "uint8 command_index",
+        "std_msgs/Header header",
+        "float32[] position",
+        "float32[] orientation",
+        "float32[] joints",
+    ]
+    assert fields(response) == [
+        "uint8 result",
+        "std_msgs/Header header",
+        "float32[] position",
+        "float32[] orientation",
+        "float32[] joints",
+    ]
 
 
 @pytest.fixture(scope="module")
@@ -87,22 +100,33 @@ def test_login_and_state(dispatcher):
     assert dispatcher.handle(CommandIndex.LOGIN, url="tcp://10.0.0.1").result == Result.SUCCESS  # already up
 
 
-@pytest.mark.parametrize("kwargs, code", [
-    (dict(command_index=99), Result.UNKNOWN_COMMAND),
-    (dict(command_index=CommandIndex.SET_JOINTS, joints=[0.0] * 5), Result.WRONG_LENGTH),
-    (dict(command_index=CommandIndex.SET_JOINTS, joints=list(HOME[:5]) + [float("nan")]), Result.NOT_FINITE),
-    (dict(command_index=CommandIndex.MOVE_J, joints=list(HOME[:2]) + [4.0] + list(HOME[3:])), Result.JOINT_LIMIT),
-    (dict(command_index=CommandIndex.SET_JOINTS, joints=list(HOME + [0.5, 0, 0, 0, 0, 0])), Result.TOO_FAR),
-    (dict(command_index=CommandIndex.MOVE_L, position=[0.1, 0.2], orientation=[0, 0, 0, 1]), Result.WRONG_LENGTH),
-    (dict(command_index=CommandIndex.MOVE_L, position=[0.1, 0.2, float("inf")], orientation=[0, 0, 0, 1]),
-     Result.NOT_FINITE),
-    (dict(command_index=CommandIndex.MOVE_L, position=[0.3, 0.2, 0.3], orientation=[0, 0, 0, 2]),
-     Result.BAD_ORIENTATION),
-    (dict(command_index=CommandIndex.MOVE_L, position=[0.3, 0.2, -0.3], orientation=[0, 0, 0, 1]),
-     Result.OUT_OF_WORKSPACE),
-    (dict(command_index=CommandIndex.MOVE_L, position=[0.9, 0.9, 0.9], orientation=[0, 0, 0, 1]),
-     Result.UNREACHABLE),
-])
+@pytest.mark.parametrize(
+    "kwargs, code",
+    [
+        (dict(command_index=99), Result.UNKNOWN_COMMAND),
+        (dict(command_index=CommandIndex.SET_JOINTS, joints=[0.0] * 5), Result.WRONG_LENGTH),
+        (dict(command_index=CommandIndex.SET_JOINTS, joints=list(HOME[:5]) + [float("nan")]), Result.NOT_FINITE),
+        (dict(command_index=CommandIndex.MOVE_J, joints=list(HOME[:2]) + [4.0] + list(HOME[3:])), Result.JOINT_LIMIT),
+        (dict(command_index=CommandIndex.SET_JOINTS, joints=list(HOME + [0.5, 0, 0, 0, 0, 0])), Result.TOO_FAR),
+        (dict(command_index=CommandIndex.MOVE_L, position=[0.1, 0.2], orientation=[0, 0, 0, 1]), Result.WRONG_LENGTH),
+        (
+            dict(command_index=CommandIndex.MOVE_L, position=[0.1, 0.2, float("inf")], orientation=[0, 0, 0, 1]),
+            Result.NOT_FINITE,
+        ),
+        (
+            dict(command_index=CommandIndex.MOVE_L, position=[0.3, 0.2, 0.3], orientation=[0, 0, 0, 2]),
+            Result.BAD_ORIENTATION,
+        ),
+        (
+            dict(command_index=CommandIndex.MOVE_L, position=[0.3, 0.2, -0.3], orientation=[0, 0, 0, 1]),
+            Result.OUT_OF_WORKSPACE,
+        ),
+        (
+            dict(command_index=CommandIndex.MOVE_L, position=[0.9, 0.9, 0.9], orientation=[0, 0, 0, 1]),
+            Result.UNREACHABLE,
+        ),
+    ],
+)
 def test_bad_requests_are_refused_and_the_robot_does_not_move(dispatcher, sim, kwargs, code):
     dispatcher.handle(CommandIndex.LOGIN, url="sim://")
     before = sim.get_robot_joints()
@@ -164,18 +188,41 @@ class LaggingServo(RobotDriver):
         self.q = np.zeros(6)
         self.targets = []
 
-    def get_robots(self): return [("lagging", 6)]
-    def login(self, url, user="", password=""): pass
-    def disconnect(self): pass
-    def get_robot_joints(self): return self.q.copy()
-    def get_robot_cartesian_position(self): return np.zeros(3), np.array([0, 0, 0, 1.0])
-    def set_joints(self, joints): self.targets.append(np.array(joints))
-    def move_j(self, joints, timeout=30.0): self.q = np.array(joints, float)
-    def move_l(self, position, orientation, timeout=30.0): pass
-    def stop(self): pass
-    def set_gripper(self, closed): pass
-    def set_digital_output(self, output, value): pass
-    def status(self): return DriverStatus(connected=True)
+    def get_robots(self):
+        return [("lagging", 6)]
+
+    def login(self, url, user="", password=""):
+        pass
+
+    def disconnect(self):
+        pass
+
+    def get_robot_joints(self):
+        return self.q.copy()
+
+    def get_robot_cartesian_position(self):
+        return np.zeros(3), np.array([0, 0, 0, 1.0])
+
+    def set_joints(self, joints):
+        self.targets.append(np.array(joints))
+
+    def move_j(self, joints, timeout=30.0):
+        self.q = np.array(joints, float)
+
+    def move_l(self, position, orientation, timeout=30.0):
+        pass
+
+    def stop(self):
+        pass
+
+    def set_gripper(self, closed):
+        pass
+
+    def set_digital_output(self, output, value):
+        pass
+
+    def status(self):
+        return DriverStatus(connected=True)
 
 
 def test_a_stream_is_checked_step_by_step_and_bounded_ahead_of_a_lagging_robot():
@@ -207,8 +254,10 @@ def test_a_stream_is_checked_step_by_step_and_bounded_ahead_of_a_lagging_robot()
 
 
 def test_sim_scene_reset_puts_part_arm_and_gripper_back():
-    scene = [{"name": "table", "box": [0.2, 0.32, 0.1], "position": [-0.5, -0.04, 0.1], "mass": 0.0},
-             {"name": "part", "box": [0.015, 0.015, 0.015], "position": [-0.5, -0.2, 0.215], "mass": 0.05}]
+    scene = [
+        {"name": "table", "box": [0.2, 0.32, 0.1], "position": [-0.5, -0.04, 0.1], "mass": 0.0},
+        {"name": "part", "box": [0.015, 0.015, 0.015], "position": [-0.5, -0.2, 0.215], "mass": 0.05},
+    ]
     driver = PybulletSimDriver(UR5E, initial_joints=HOME, real_time=False, scene=scene)
     driver.login("sim://")
     try:
@@ -240,7 +289,7 @@ def test_a_move_that_started_late_after_a_latch_never_answers_success():
 
         def move_j(self, joints, timeout=30.0):
             self.entered.set()
-            self.proceed.wait(5.0)   # the driver is still connecting when the latch comes
+            self.proceed.wait(5.0)  # the driver is still connecting when the latch comes
             self.q = np.array(joints, float)
 
         def stop(self):

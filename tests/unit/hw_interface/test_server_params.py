@@ -1,13 +1,15 @@
 """motion_controller_server's parameters: the shipped YAMLs pass their schemas (server and
 driver), an unknown or out-of-range key is refused naming the file and the valid keys."""
+
 import os
 
 import pytest
 import yaml
 
-from ..conftest import ROOT, UR5E
 from hw_interface.server_params import SERVER_PARAMETERS, check_server_params
 from motion_common.errors import ParameterError
+
+from ..conftest import ROOT, UR5E
 
 CONFIG = os.path.join(ROOT, "src", "hw_interface", "config")
 
@@ -18,8 +20,9 @@ def load(name, **extra):
     return values
 
 
-@pytest.mark.parametrize("name, driver", [("sim_driver.yaml", None), ("ur_driver.yaml", None),
-                                          ("ur_driver.yaml", "ur_rtde_fake")])
+@pytest.mark.parametrize(
+    "name, driver", [("sim_driver.yaml", None), ("ur_driver.yaml", None), ("ur_driver.yaml", "ur_rtde_fake")]
+)
 def test_shipped_configs_pass(name, driver):
     values = load(name)
     if driver:
@@ -38,8 +41,11 @@ def test_unknown_server_key_names_file_and_valid_keys():
 def test_unknown_or_bad_driver_key_is_refused():
     values = load("ur_driver.yaml")
     values["driver_params"]["fake_controller"] = True
-    with pytest.raises(ParameterError, match=r"ur_driver.yaml: driver_params of driver 'ur_rtde'.*"
-                                             r"unknown parameter 'fake_controller'.*valid keys"):
+    with pytest.raises(
+        ParameterError,
+        match=r"ur_driver.yaml: driver_params of driver 'ur_rtde'.*"
+        r"unknown parameter 'fake_controller'.*valid keys",
+    ):
         check_server_params(values, "ur_driver.yaml")
     values = load("ur_driver.yaml")
     values["driver_params"]["lookahead_time"] = 0.5

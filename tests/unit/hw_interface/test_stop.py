@@ -1,17 +1,19 @@
 """STOP interrupts everything: the pybullet driver and the UR driver on its real-time fake,
 MoveJ and MoveL, a STOP command and the latched stop of the dispatcher, sent from another
 thread during a ~3 s move. Bounds are generous (0.2 s) for a loaded 2-core machine."""
+
 import time
 
 import numpy as np
 import pytest
 
-from ..conftest import HOME, UR5E
 from hw_interface.dispatcher import CommandDispatcher
 from hw_interface.errors import HwInterfaceError
 from hw_interface.protocol import CommandIndex, Result
 from hw_interface.registry import create_driver
 from hw_interface.sim_driver import PybulletSimDriver
+
+from ..conftest import HOME, UR5E
 from ..stop_helpers import stop_during, wait_for
 
 LONG_J = HOME + [2.8, 0.0, 0.0, 0.0, 0.0, 0.0]
@@ -66,12 +68,15 @@ def test_stop_command_interrupts_a_blocking_move(driver, kind):
         request = dict(command_index=CommandIndex.MOVE_J, joints=list(LONG_J))
     else:
         position, orientation = driver.get_robot_cartesian_position()
-        request = dict(command_index=CommandIndex.MOVE_L, position=list(position + [0.0, 0.0, -0.3]),
-                       orientation=list(orientation))
+        request = dict(
+            command_index=CommandIndex.MOVE_L, position=list(position + [0.0, 0.0, -0.3]), orientation=list(orientation)
+        )
     answers = {}
-    runner, stop_at, stop_took = stop_during(lambda: answers.update(move=dispatcher.handle(**request)),
-                                             moved(driver, start),
-                                             lambda: answers.update(stop=dispatcher.handle(CommandIndex.STOP)))
+    runner, stop_at, stop_took = stop_during(
+        lambda: answers.update(move=dispatcher.handle(**request)),
+        moved(driver, start),
+        lambda: answers.update(stop=dispatcher.handle(CommandIndex.STOP)),
+    )
     stop_answer, move_answer = answers["stop"], answers["move"]
     assert stop_answer.result == Result.SUCCESS and stop_took < 0.2
     assert move_answer.result == Result.INTERRUPTED, move_answer.reason
@@ -88,17 +93,20 @@ def test_latched_stop_interrupts_refuses_and_releases(driver):
     answers = []
     runner, stop_at, stop_took = stop_during(
         lambda: answers.append(dispatcher.handle(CommandIndex.MOVE_J, joints=list(LONG_J))),
-        moved(driver, start), lambda: dispatcher.latch_stop("test"))
+        moved(driver, start),
+        lambda: dispatcher.latch_stop("test"),
+    )
     assert answers[0].result == Result.INTERRUPTED and "latch_stop" in answers[0].reason
     assert stop_took < 0.2 and runner.returned_at - stop_at < 0.2
     assert dispatcher.latched and dispatcher.latch_source == "test"
     assert_still(driver)
     here = driver.get_robot_joints()
     position, orientation = driver.get_robot_cartesian_position()
-    for request in (dict(command_index=CommandIndex.SET_JOINTS, joints=list(here + 0.01)),
-                    dict(command_index=CommandIndex.MOVE_J, joints=list(HOME)),
-                    dict(command_index=CommandIndex.MOVE_L, position=list(position + [0, 0, 0.01]),
-                         orientation=list(orientation))):
+    for request in (
+        dict(command_index=CommandIndex.SET_JOINTS, joints=list(here + 0.01)),
+        dict(command_index=CommandIndex.MOVE_J, joints=list(HOME)),
+        dict(command_index=CommandIndex.MOVE_L, position=list(position + [0, 0, 0.01]), orientation=list(orientation)),
+    ):
         answer = dispatcher.handle(**request)
         assert answer.result == Result.LATCHED_STOP and "latch_stop" in answer.reason and "false" in answer.reason
     np.testing.assert_allclose(driver.get_robot_joints(), here, atol=2e-4)  # nothing moved

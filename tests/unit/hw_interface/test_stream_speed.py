@@ -6,15 +6,17 @@ looks like. Two ways to break it are checked here: the simulated servo jumping t
 far target (the driver never limited streamed targets) and stamps taken when the state
 is read rather than when it was simulated.
 """
+
 import threading
 import time
 
 import numpy as np
 import pytest
 
-from ..conftest import HOME, UR5E
 from hw_interface.sim_driver import PybulletSimDriver
 from hw_interface.stream_follower import StreamFollower
+
+from ..conftest import HOME, UR5E
 
 
 def test_follower_moves_at_most_the_limit_per_step_along_the_joint_path():
@@ -32,7 +34,7 @@ def test_follower_moves_at_most_the_limit_per_step_along_the_joint_path():
     # Joint 0 needs 0.5 s at 1 rad/s, so joint 1 is slowed to keep the straight joint path.
     moving = np.abs(steps[:, 0]) > 0
     np.testing.assert_allclose(steps[moving, 1], -steps[moving, 0], atol=1e-12)
-    np.testing.assert_allclose(follower.setpoint, [0.5, -0.5])   # arrives exactly, no overshoot
+    np.testing.assert_allclose(follower.setpoint, [0.5, -0.5])  # arrives exactly, no overshoot
 
 
 def test_follower_reaches_a_near_goal_in_one_step_and_holds_after_reset():
@@ -86,7 +88,8 @@ def test_fuzzed_stream_speeds_from_joint_samples_stay_within_the_urdf_limits(rng
     assert moved > 0.2, f"the fuzzed stream must move the arm (moved {moved:.3f} rad)"
     # 2 %: the servo's own settling; a violation is the 10-60 rad/s of an unlimited jump.
     assert float((speeds / limits).max()) <= 1.02, (
-        f"/joint_states speed {speeds.max(axis=0)} rad/s against limits {limits}")
+        f"/joint_states speed {speeds.max(axis=0)} rad/s against limits {limits}"
+    )
     # The velocity pybullet reports is the solver's instantaneous value: it settles onto the
     # motor's maxVelocity with a few % of ripple (3 % seen on a loaded machine), far from the
     # 10-60 rad/s of an unlimited jump.

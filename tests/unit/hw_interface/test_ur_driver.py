@@ -2,6 +2,7 @@
 which moves the arm in real time): arming, motions, STOP from another thread, timeouts,
 arrival checks, streaming, IO, backoff with an injected sleep, and fault injection
 (protective stop, dropped connection, driver exceptions)."""
+
 import inspect
 import threading
 import time
@@ -9,13 +10,14 @@ import time
 import numpy as np
 import pytest
 
-from ..conftest import HOME, UR5E
 from hw_interface.dispatcher import CommandDispatcher
 from hw_interface.errors import HwInterfaceError
 from hw_interface.protocol import CommandIndex, Result
 from hw_interface.registry import create_driver, driver_parameters
 from hw_interface.testing.fake_rtde import FakeUR
 from hw_interface.ur_driver import URRtdeDriver, pose_to_ur, ur_to_pose
+
+from ..conftest import HOME, UR5E
 from ..stop_helpers import stop_during, wait_for
 
 
@@ -25,8 +27,9 @@ def fake():
 
 
 def make(fake, **kw):
-    params = dict(robot_ip="192.0.2.10", armed=True, rtde_classes=fake.classes(), reconnect_backoff=0.001,
-                  sleep=lambda s: None)
+    params = dict(
+        robot_ip="192.0.2.10", armed=True, rtde_classes=fake.classes(), reconnect_backoff=0.001, sleep=lambda s: None
+    )
     params.update(kw)
     return URRtdeDriver(UR5E, **params)
 
@@ -71,7 +74,7 @@ def test_move_j_and_move_l_are_async_on_the_controller_and_succeed_on_arrival(fa
     np.testing.assert_allclose(driver.get_robot_cartesian_position()[0], position + [0.0, 0.05, 0.0], atol=1e-4)
 
 
-LONG_J = HOME + [2.8, 0.0, 0.0, 0.0, 0.0, 0.0]   # ~3.5 s at 1 rad/s, 1.4 rad/s^2
+LONG_J = HOME + [2.8, 0.0, 0.0, 0.0, 0.0, 0.0]  # ~3.5 s at 1 rad/s, 1.4 rad/s^2
 
 
 def assert_still_after_decel(fake, bound=2.0):
@@ -85,8 +88,9 @@ def assert_still_after_decel(fake, bound=2.0):
 def test_stop_from_another_thread_interrupts_move_j_promptly(fake):
     driver = make(fake)
     driver.login()
-    runner, stop_at, stop_took = stop_during(lambda: driver.move_j(LONG_J), lambda: fake.q[0] > HOME[0] + 0.3,
-                                             driver.stop)
+    runner, stop_at, stop_took = stop_during(
+        lambda: driver.move_j(LONG_J), lambda: fake.q[0] > HOME[0] + 0.3, driver.stop
+    )
     assert stop_took < 0.2 and runner.returned_at - stop_at < 0.2
     assert runner.error is not None and runner.error.result == Result.INTERRUPTED, runner.error
     assert "stopJ" in fake.names() and "stopL" not in fake.names()
@@ -99,10 +103,11 @@ def test_stop_from_another_thread_interrupts_move_l_with_stop_l(fake):
     driver = make(fake, linear_speed=0.1)
     driver.login()
     position, orientation = driver.get_robot_cartesian_position()
-    goal = position + [0.0, 0.0, -0.3]   # ~3 s at 0.1 m/s
+    goal = position + [0.0, 0.0, -0.3]  # ~3 s at 0.1 m/s
     start = fake.q.copy()
-    runner, stop_at, _ = stop_during(lambda: driver.move_l(goal, orientation),
-                                     lambda: np.max(np.abs(fake.q - start)) > 0.05, driver.stop)
+    runner, stop_at, _ = stop_during(
+        lambda: driver.move_l(goal, orientation), lambda: np.max(np.abs(fake.q - start)) > 0.05, driver.stop
+    )
     assert runner.returned_at - stop_at < 0.2
     assert runner.error.result == Result.INTERRUPTED
     assert [c for c in fake.calls if c[0] == "stopL"][-1][1] == (10.0, True)
@@ -136,13 +141,15 @@ def test_success_only_when_the_measured_arm_arrived(fake, monkeypatch):
 def test_protective_stop_or_lost_connection_during_a_move_interrupts_it(fake):
     driver = make(fake)
     driver.login()
-    runner, stop_at, _ = stop_during(lambda: driver.move_j(LONG_J), lambda: fake.q[0] > HOME[0] + 0.2,
-                                     fake.trigger_protective_stop)
+    runner, stop_at, _ = stop_during(
+        lambda: driver.move_j(LONG_J), lambda: fake.q[0] > HOME[0] + 0.2, fake.trigger_protective_stop
+    )
     assert runner.error.result == Result.INTERRUPTED and "protective" in str(runner.error)
     assert runner.returned_at - stop_at < 0.2
     fake.clear_protective_stop()
-    runner, _, _ = stop_during(lambda: driver.move_j(HOME), fake.is_moving,
-                               lambda: fake.drop_connection(allow_reconnect=True))
+    runner, _, _ = stop_during(
+        lambda: driver.move_j(HOME), fake.is_moving, lambda: fake.drop_connection(allow_reconnect=True)
+    )
     assert runner.error.result == Result.INTERRUPTED and "connection" in str(runner.error)
     driver.move_j(HOME)  # reconnects, then arrives
     np.testing.assert_allclose(fake.q, HOME, atol=driver.goal_tolerance)
@@ -242,8 +249,15 @@ def test_connect_retries_with_backoff_then_fails():
             attempts.append(ip)
             raise RuntimeError("connection refused")
 
-    driver = URRtdeDriver(UR5E, robot_ip="192.0.2.10", armed=True, rtde_classes=(Refusing, Refusing, Refusing),
-                          reconnect_attempts=3, reconnect_backoff=0.5, sleep=sleeps.append)
+    driver = URRtdeDriver(
+        UR5E,
+        robot_ip="192.0.2.10",
+        armed=True,
+        rtde_classes=(Refusing, Refusing, Refusing),
+        reconnect_attempts=3,
+        reconnect_backoff=0.5,
+        sleep=sleeps.append,
+    )
     with pytest.raises(HwInterfaceError, match="connection refused") as err:
         driver.login()
     assert err.value.result == Result.LOGIN_FAILED and len(attempts) == 3
@@ -281,7 +295,10 @@ def test_registry_builds_the_ur_driver_and_checks_servo_ranges(fake):
     with pytest.raises(HwInterfaceError, match="bad parameters"):
         create_driver("ur_rtde", urdf_path=UR5E, fake_controller=True)  # no flag: the fake is injected
     import hw_interface.ur_driver as production
-    imports = [line for line in inspect.getsource(production).splitlines() if line.lstrip().startswith(("import", "from"))]
+
+    imports = [
+        line for line in inspect.getsource(production).splitlines() if line.lstrip().startswith(("import", "from"))
+    ]
     assert not [line for line in imports if "fake" in line or "testing" in line]
     with pytest.raises(HwInterfaceError, match="lookahead"):
         URRtdeDriver(UR5E, lookahead_time=1.0)
@@ -304,6 +321,7 @@ def test_ur_rtde_fake_driver_starts_at_the_start_pose_and_checks_its_parameters(
 
 def test_a_stop_then_a_new_target_never_leaves_two_servoj_loops(fake):
     import threading
+
     driver = make(fake, stream_timeout=5.0)
     driver.login()
     for _ in range(20):  # stop and restart at once, many times: the old loop may be mid-period

@@ -1,6 +1,7 @@
 """Camera input of the kitting cell: frame sources (video file, image folder, a live camera
 that fails and comes back, on a fake clock), numpy <-> sensor_msgs conversions, the
 intrinsics file, live view selection and the calibrate_camera / camera_driver commands."""
+
 import os
 import subprocess
 import sys
@@ -11,17 +12,22 @@ import pybullet as p
 import pytest
 from sensor_msgs.msg import CameraInfo, Image
 
-from ..conftest import ROOT
-from kitting.calibration import BoardSpec, Intrinsics
+from kitting.calibration import BoardSpec, Intrinsics, write_intrinsics_yaml
 from kitting.calibration_views import ViewCollector
 from kitting.camera import PinholeCamera
 from kitting.frame_source import DeviceSource, FrameSourceError, ImageFolderSource, VideoSource, open_source
-from kitting.image_msgs import (array_to_image, bgr_to_image, camera_info_from_intrinsics, image_to_bgr,
-                                intrinsics_from_camera_info)
-from kitting.calibration import write_intrinsics_yaml
+from kitting.image_msgs import (
+    array_to_image,
+    bgr_to_image,
+    camera_info_from_intrinsics,
+    image_to_bgr,
+    intrinsics_from_camera_info,
+)
 from kitting.intrinsics_file import IntrinsicsFileError, load_camera_info_yaml, resolve_camera_info_url
 from kitting.sim_scene import render_board_views
 from motion_sensor.devices.device import Backoff
+
+from ..conftest import ROOT
 
 NODES = os.path.join(ROOT, "src", "kitting", "nodes")
 PYTHON = os.path.join(ROOT, ".venv", "bin", "python")
@@ -65,7 +71,7 @@ def corrupt_jpeg(path, which):
     """Overwrite the start of the ``which``-th JPEG in an MJPG file (the frame cannot decode)."""
     data = bytearray(open(path, "rb").read())
     starts = [i for i in range(len(data) - 1) if data[i] == 0xFF and data[i + 1] == 0xD8]
-    data[starts[which] + 2:starts[which] + 200] = bytes(198)
+    data[starts[which] + 2 : starts[which] + 200] = bytes(198)
     open(path, "wb").write(bytes(data))
 
 
@@ -109,7 +115,7 @@ def test_video_loop_replays_and_a_slow_reader_is_counted_late(tmp_path):
             notes.append(why)
             continue
         levels.append(round(float(frame.image.mean()) / 20))
-        clock.now += 0.35 if len(levels) == 2 else 0.0     # the reader stalls once
+        clock.now += 0.35 if len(levels) == 2 else 0.0  # the reader stalls once
     assert levels == [0, 1, 2, 3, 0, 1, 2, 3]
     assert notes == [f"end of {path}: playing it again"] * 2
     assert not source.finished and source.counters["loops"] == 2 and source.counters["late_frames"] == 1
@@ -141,7 +147,7 @@ def test_image_folder_in_order_with_undecodable_files_skipped(tmp_path):
     frames = level_frames(3)
     for i, frame in enumerate(frames):
         cv2.imwrite(str(tmp_path / f"view_{i}.png"), frame)
-    cv2.imwrite(str(tmp_path / "view_3.png"), np.full((48, 64), 200, np.uint8))   # grey
+    cv2.imwrite(str(tmp_path / "view_3.png"), np.full((48, 64), 200, np.uint8))  # grey
     (tmp_path / "view_1b.png").write_bytes(b"\x89PNG truncated")
     (tmp_path / "notes.txt").write_text("not an image")
     clock = FakeClock()
@@ -150,8 +156,10 @@ def test_image_folder_in_order_with_undecodable_files_skipped(tmp_path):
     assert [os.path.basename(f.name) for f in got] == ["view_0.png", "view_1.png", "view_2.png", "view_3.png"]
     assert got[3].image.shape == (48, 64, 3) and int(got[3].image[0, 0, 2]) == 200
     assert np.allclose(np.diff([f.stamp for f in got]), 0.2)
-    assert reasons == [f"{tmp_path / 'view_1b.png'}: not an image OpenCV can decode (skipped)",
-                       "end of images (4 frames)"]
+    assert reasons == [
+        f"{tmp_path / 'view_1b.png'}: not an image OpenCV can decode (skipped)",
+        "end of images (4 frames)",
+    ]
     assert source.counters["decode_failures"] == 1
     by_glob = ImageFolderSource(str(tmp_path / "view_?.png"))
     assert len(by_glob.files) == 4
@@ -169,7 +177,7 @@ def test_looping_a_folder_without_one_good_image_ends(tmp_path):
 # -- a live camera that fails and comes back ------------------------------------------------
 class FakeCapture:
     def __init__(self, script):
-        self.script = list(script)     # per grab: an image, None (the grab fails) or an exception
+        self.script = list(script)  # per grab: an image, None (the grab fails) or an exception
         self.released = False
         self.grabbed = None
 
@@ -200,9 +208,12 @@ class ClosedCapture(FakeCapture):
 
 def test_lost_camera_is_reopened_with_backoff_on_an_injected_clock():
     good = np.zeros((48, 64, 3), np.uint8)
-    sessions = [ClosedCapture([]), ClosedCapture([]),
-                FakeCapture([good, good.astype(np.float32), None, cv2.error("select() timeout"), None]),
-                FakeCapture([good])]
+    sessions = [
+        ClosedCapture([]),
+        ClosedCapture([]),
+        FakeCapture([good, good.astype(np.float32), None, cv2.error("select() timeout"), None]),
+        FakeCapture([good]),
+    ]
     opened = []
 
     def open_capture(index, width, height, fps, fourcc):
@@ -210,8 +221,18 @@ def test_lost_camera_is_reopened_with_backoff_on_an_injected_clock():
         return sessions.pop(0)
 
     clock = FakeClock()
-    source = DeviceSource(2, 640, 480, 30.0, "MJPG", max_failures=3, backoff=Backoff(0.25, 2.0, 5.0),
-                          clock=clock, sleep=clock.sleep, open_capture=open_capture)
+    source = DeviceSource(
+        2,
+        640,
+        480,
+        30.0,
+        "MJPG",
+        max_failures=3,
+        backoff=Backoff(0.25, 2.0, 5.0),
+        clock=clock,
+        sleep=clock.sleep,
+        open_capture=open_capture,
+    )
     results = [source.read() for _ in range(8)]
     reasons = [why for frame, why in results]
     assert results[0][0] is None and "camera 2 cannot be opened" in reasons[0] and "retrying in 0.25 s" in reasons[0]
@@ -219,12 +240,18 @@ def test_lost_camera_is_reopened_with_backoff_on_an_injected_clock():
     assert results[2][0] is not None and results[2][0].image.shape == (48, 64, 3)
     assert "unusable frame: pixel type float32" in reasons[3]
     assert "read failed, 1 in a row" in reasons[4] and "select() timeout" in reasons[5]
-    assert "camera 2 lost (3 reads in a row failed); reopening in 0.25 s" == reasons[6]   # backoff reset by a frame
+    assert "camera 2 lost (3 reads in a row failed); reopening in 0.25 s" == reasons[6]  # backoff reset by a frame
     assert results[7][0] is not None and results[7][0].index == 1
     assert clock.sleeps == [0.25, 0.5, 0.25]
     assert opened[0] == (2, 640, 480, 30.0, "MJPG") and len(opened) == 4
-    assert dict(source.counters) == {"open_attempts": 4, "open_failed": 2, "frames": 2, "bad_frames": 1,
-                                     "read_failed": 3, "disconnects": 1}
+    assert dict(source.counters) == {
+        "open_attempts": 4,
+        "open_failed": 2,
+        "frames": 2,
+        "bad_frames": 1,
+        "read_failed": 3,
+        "disconnects": 1,
+    }
     assert source.mode == (64, 48, 30.0)
 
 
@@ -245,13 +272,14 @@ def test_image_round_trip_through_the_wire(rng):
     assert (msg.encoding, msg.step, msg.width, msg.height, msg.header.frame_id) == ("bgr8", 15, 5, 6, "cam")
     assert msg.header.stamp.to_sec() == 12.5
     from io import BytesIO
+
     buffer = BytesIO()
     msg.serialize(buffer)
     received = Image()
     received.deserialize(buffer.getvalue())
     back, why = image_to_bgr(received)
     assert why == "" and np.array_equal(back, bgr)
-    back[0, 0] = 0                                            # a writable copy
+    back[0, 0] = 0  # a writable copy
     rgb, _ = image_to_bgr(array_to_image(bgr[:, :, ::-1], None, "cam", "rgb8"))
     assert np.array_equal(rgb, bgr)
     grey = bgr[:, :, 0].copy()
@@ -270,16 +298,19 @@ def test_padded_rows_and_list_data_are_decoded(rng):
     assert np.array_equal(image_to_bgr(msg)[0], bgr)
 
 
-@pytest.mark.parametrize("change, reason", [
-    (dict(encoding="bgr16"), "unsupported encoding 'bgr16'"),
-    (dict(encoding="yuv422"), "unsupported encoding 'yuv422'"),
-    (dict(step=11), "step 11 bytes is shorter than a row (4 px x 3 bytes = 12)"),
-    (dict(step=13), "data has 36 bytes, expected step 13 x height 3 = 39"),
-    (dict(data=bytes(35)), "data has 35 bytes, expected step 12 x height 3 = 36"),
-    (dict(height=0, data=b""), "empty image (4 x 0 px)"),
-    (dict(data=[300] * 36), "values outside 0..255"),
-    (dict(encoding="mono8", step=4), "data has 36 bytes, expected step 4 x height 3 = 12"),
-])
+@pytest.mark.parametrize(
+    "change, reason",
+    [
+        (dict(encoding="bgr16"), "unsupported encoding 'bgr16'"),
+        (dict(encoding="yuv422"), "unsupported encoding 'yuv422'"),
+        (dict(step=11), "step 11 bytes is shorter than a row (4 px x 3 bytes = 12)"),
+        (dict(step=13), "data has 36 bytes, expected step 13 x height 3 = 39"),
+        (dict(data=bytes(35)), "data has 35 bytes, expected step 12 x height 3 = 36"),
+        (dict(height=0, data=b""), "empty image (4 x 0 px)"),
+        (dict(data=[300] * 36), "values outside 0..255"),
+        (dict(encoding="mono8", step=4), "data has 36 bytes, expected step 4 x height 3 = 12"),
+    ],
+)
 def test_malformed_images_are_refused_with_a_reason(change, reason):
     fields = dict(height=3, width=4, encoding="bgr8", step=12, data=bytes(36))
     fields.update(change)
@@ -319,13 +350,15 @@ def test_intrinsics_yaml_is_saved_atomically_and_read_back(tmp_path):
     K = np.array([[600.5, 0, 319.0], [0, 601.5, 240.0], [0, 0, 1]])
     path = str(tmp_path / "calib" / "camera.yaml")
     write_intrinsics_yaml(path, Intrinsics(K, np.zeros(5), (640, 480), 0.25), "cam_a")
-    assert os.listdir(tmp_path / "calib") == ["camera.yaml"]               # no temporary left
+    assert os.listdir(tmp_path / "calib") == ["camera.yaml"]  # no temporary left
     info = load_camera_info_yaml(path)
     assert (info.width, info.height) == (640, 480) and list(info.K) == list(K.ravel())
     assert list(info.P) == [600.5, 0, 319.0, 0, 0, 601.5, 240.0, 0, 0, 0, 1, 0]
     assert resolve_camera_info_url("file://" + path) == path
-    assert resolve_camera_info_url("package://kitting/config/c.yaml", lambda pkg: "/opt/" + pkg) == \
-        "/opt/kitting/config/c.yaml"
+    assert (
+        resolve_camera_info_url("package://kitting/config/c.yaml", lambda pkg: "/opt/" + pkg)
+        == "/opt/kitting/config/c.yaml"
+    )
     with pytest.raises(IntrinsicsFileError, match="only file:// and package://"):
         resolve_camera_info_url("http://example.invalid/c.yaml")
     with pytest.raises(IntrinsicsFileError, match="cannot read the intrinsics file.*calibrate_camera"):
@@ -361,8 +394,9 @@ def write_views(folder, views):
 
 
 def calibrate(*args):
-    return subprocess.run([PYTHON, os.path.join(NODES, "calibrate_camera"), *args], capture_output=True, text=True,
-                          timeout=120, env=ENV)
+    return subprocess.run(
+        [PYTHON, os.path.join(NODES, "calibrate_camera"), *args], capture_output=True, text=True, timeout=120, env=ENV
+    )
 
 
 def test_view_collector_takes_only_moved_boards(board_views):
@@ -384,7 +418,7 @@ def test_calibrate_camera_from_images_within_one_percent(tmp_path, board_views):
     proc = calibrate("--images", os.path.join(folder, "*.png"), "--output", output, "--camera-name", "test_cam")
     assert proc.returncode == 0, proc.stderr
     assert "board_99.png: not an image OpenCV can decode" in proc.stderr
-    assert "RMS reprojection error" in proc.stdout and proc.stdout.count("board_") == 12   # per-view errors
+    assert "RMS reprojection error" in proc.stdout and proc.stdout.count("board_") == 12  # per-view errors
     info = load_camera_info_yaml(output)
     fx, fy = info.K[0], info.K[4]
     assert abs(fx / TRUE_F - 1) < 0.01 and abs(fy / TRUE_F - 1) < 0.01, proc.stdout
@@ -394,13 +428,12 @@ def test_calibrate_camera_from_images_within_one_percent(tmp_path, board_views):
 
 def test_calibrate_camera_grabs_views_from_a_video_like_a_camera(tmp_path, board_views):
     frames = []
-    for view in board_views:                                   # each pose held for 3 frames
+    for view in board_views:  # each pose held for 3 frames
         frames += [cv2.cvtColor(view, cv2.COLOR_RGB2BGR)] * 3
     video = write_video(tmp_path / "board.avi", frames, fps=6.0)
     output = str(tmp_path / "camera.yaml")
     saved = str(tmp_path / "saved")
-    proc = calibrate("--video", video, "--count", "10", "--interval", "0.4", "--output", output,
-                     "--save-views", saved)
+    proc = calibrate("--video", video, "--count", "10", "--interval", "0.4", "--output", output, "--save-views", saved)
     assert proc.returncode == 0, proc.stderr
     assert "view 10/10" in proc.stderr
     assert sorted(os.listdir(saved)) == [f"view_{i:03d}.png" for i in range(10)]
@@ -425,7 +458,8 @@ def test_calibrate_camera_fails_clearly_on_too_few_views(tmp_path, board_views):
 def test_commands_have_help():
     proc = calibrate("--help")
     assert proc.returncode == 0 and "--images" in proc.stdout and "--square-size" in proc.stdout
-    proc = subprocess.run([PYTHON, os.path.join(NODES, "camera_driver"), "--help"], capture_output=True, text=True,
-                          timeout=60, env=ENV)
+    proc = subprocess.run(
+        [PYTHON, os.path.join(NODES, "camera_driver"), "--help"], capture_output=True, text=True, timeout=60, env=ENV
+    )
     assert proc.returncode == 0, proc.stderr
     assert "camera_info_url" in proc.stdout and "/kitting/camera/image_raw" in proc.stdout

@@ -9,6 +9,7 @@
 - kitting.campaign: trial planning and the campaign statistics;
 - kitting.vision_pipeline.VisionPipeline on a few rendered images (pybullet DIRECT).
 """
+
 import math
 from dataclasses import replace
 
@@ -28,8 +29,8 @@ from kitting.sim_scene import FOREIGN_CLASS, SimScene, marker_image
 from kitting.vision import PartObservation
 from kitting.vision_pipeline import VisionPipeline
 
-DOWN = [1.0, 0.0, 0.0, 0.0]      # tool0 quaternion (x, y, z, w): tool z axis pointing down
-STEP = 0.01                      # s, the fake controller's / the tests' update period
+DOWN = [1.0, 0.0, 0.0, 0.0]  # tool0 quaternion (x, y, z, w): tool z axis pointing down
+STEP = 0.01  # s, the fake controller's / the tests' update period
 
 
 @pytest.fixture(scope="module")
@@ -102,7 +103,8 @@ def test_belt_parts_move_at_belt_speed_times_clock_time_also_across_an_overrun(c
         # The rendered body is where the ground truth says.
         body = sim.scene.body_of(part)
         assert p.getBasePositionAndOrientation(body, physicsClientId=sim.client)[0][0] == pytest.approx(
-            x0 + cell.belt.speed * 1.0, abs=1e-6)
+            x0 + cell.belt.speed * 1.0, abs=1e-6
+        )
         # A time that is not later changes nothing.
         sim.advance(100.5)
         assert _state(sim, part).position[0] == pytest.approx(x0 + cell.belt.speed * 1.0, abs=1e-9)
@@ -126,7 +128,7 @@ def test_parts_past_the_belt_end_are_gone(sim, cell):
     assert _state(sim, part).state == "gone"
     assert part not in sim.scene.parts
     assert [pose for pose in sim.render_poses() if pose[0] == part] == []
-    sim.advance(t_end + 1.0)        # stays gone, is not moved any more
+    sim.advance(t_end + 1.0)  # stays gone, is not moved any more
     assert _state(sim, part).state == "gone"
 
 
@@ -140,16 +142,16 @@ def test_magnet_grips_only_inside_grip_gap_and_grip_radius(sim, cell):
 
     def try_grip(dy, gap, magnet=True):
         t = sim.time + STEP
-        x = _belt_x(sim, part) + sim.belt_speed * STEP        # where the part is at t
+        x = _belt_x(sim, part) + sim.belt_speed * STEP  # where the part is at t
         sim.set_tool_pose(_tool_for_face(cell, [x, cell.belt.y + dy, top + gap]), DOWN)
         sim.set_magnet(magnet)
         sim.advance(t)
         return sim.held
 
-    assert try_grip(0.0, 0.003, magnet=False) is None             # magnet off
-    assert try_grip(0.02, 0.003) is None                          # 2 cm to the side
-    assert try_grip(0.0, 0.003 + 0.02) is None                    # 2 cm too high
-    assert try_grip(0.0, -0.004) is None                          # face pushed into the part
+    assert try_grip(0.0, 0.003, magnet=False) is None  # magnet off
+    assert try_grip(0.02, 0.003) is None  # 2 cm to the side
+    assert try_grip(0.0, 0.003 + 0.02) is None  # 2 cm too high
+    assert try_grip(0.0, -0.004) is None  # face pushed into the part
     assert {s.state for s in sim.states()} == {"belt"}
     # Off-centre and a gap, but inside both limits: gripped, and only that part.
     held = try_grip(0.75 * gripper.grip_radius, 0.75 * gripper.grip_gap)
@@ -214,8 +216,8 @@ def test_released_over_the_floor_or_the_belt_rests_without_a_slot(sim, cell):
     floor_top = cell.belt.height - 0.35 + 0.005
     part = _grip_from_belt(sim, cell, "washer_silver")
     _move_face(sim, np.r_[_face(sim)[:2], 0.20])
-    _move_face(sim, [-0.30, 0.30, 0.20], speed=0.5)     # beside the belt, away from the tray
-    _wait(sim, 0.3)                                     # the part stops swinging
+    _move_face(sim, [-0.30, 0.30, 0.20], speed=0.5)  # beside the belt, away from the tray
+    _wait(sim, 0.3)  # the part stops swinging
     sim.set_magnet(False)
     _wait(sim, 1.5)
     state = _state(sim, part)
@@ -252,9 +254,14 @@ def test_spawn_refuses_unknown_classes_and_off_belt_offsets(sim, cell):
 def test_non_finite_or_malformed_tool_poses_are_ignored(sim, cell):
     good = _tool_for_face(cell, [-0.3, 0.6, 0.2])
     sim.set_tool_pose(good, DOWN)
-    for position, orientation in (([math.nan, 0.6, 0.2], DOWN), ([math.inf, 0.6, 0.2], DOWN),
-                                  (good, [math.nan, 0.0, 0.0, 1.0]), (good, [0.0, 0.0, 0.0, 0.0]),
-                                  ([0.1, 0.2], DOWN), (good, [0.0, 0.0, 1.0])):
+    for position, orientation in (
+        ([math.nan, 0.6, 0.2], DOWN),
+        ([math.inf, 0.6, 0.2], DOWN),
+        (good, [math.nan, 0.0, 0.0, 1.0]),
+        (good, [0.0, 0.0, 0.0, 0.0]),
+        ([0.1, 0.2], DOWN),
+        (good, [0.0, 0.0, 1.0]),
+    ):
         sim.set_tool_pose(position, orientation)
         assert np.array_equal(sim.tool_position, good)
         assert np.allclose(sim.tool_orientation, DOWN)
@@ -271,7 +278,7 @@ def test_real_time_factor_is_one_when_keeping_up_and_shows_overruns(sim):
     assert sim.real_time_factor == pytest.approx(1.0, abs=0.03)
     assert sim.overruns == 0
     assert sim.steps == pytest.approx(2.0 / sim.time_step, abs=2)
-    for k in range(1, 5):                 # 0.5 s late every time: 0.25 s stepped of each
+    for k in range(1, 5):  # 0.5 s late every time: 0.25 s stepped of each
         sim.advance(2.0 + 0.5 * k)
     assert sim.overruns == 4
     assert sim.real_time_factor == pytest.approx(MAX_CATCH_UP / 0.5, abs=0.03)
@@ -304,9 +311,9 @@ class FakeController:
         self.next_frame = self.t
         self.observe = None
         self.moves, self.gripper_calls, self.frames = [], [], 0
-        self.fail_next_move = 0          # result code raised halfway through the next move_l
-        self.before_move = None          # called with each move_l target before it starts
-        self.blind_after_grip = False    # the camera stops delivering once the magnet is on
+        self.fail_next_move = 0  # result code raised halfway through the next move_l
+        self.before_move = None  # called with each move_l target before it starts
+        self.blind_after_grip = False  # the camera stops delivering once the magnet is on
         self.blind = False
         sim.set_tool_pose(self.position, self.orientation)
 
@@ -351,14 +358,22 @@ class FakeController:
         if self.observe is not None and not self.blind and self.t >= self.next_frame - 1e-9:
             self.next_frame = self.t + self.frame_period
             self.frames += 1
-            seen = [PartObservation(s.class_name, float(s.position[0] + self.rng.normal(0, self.noise)),
-                                    float(s.position[1] + self.rng.normal(0, self.noise)), 0.0, 0.9, (0, 0))
-                    for s in self.sim.states()
-                    if s.state == "belt" and self.view[0] <= s.position[0] <= self.view[1]]
+            seen = [
+                PartObservation(
+                    s.class_name,
+                    float(s.position[0] + self.rng.normal(0, self.noise)),
+                    float(s.position[1] + self.rng.normal(0, self.noise)),
+                    0.0,
+                    0.9,
+                    (0, 0),
+                )
+                for s in self.sim.states()
+                if s.state == "belt" and self.view[0] <= s.position[0] <= self.view[1]
+            ]
             self.observe(self.t, seen)
 
 
-PICKER_PARAMS = {"descent_time": 0.46}     # the fake's descent (8 cm: 0.3 s + 0.08 / 0.5 s)
+PICKER_PARAMS = {"descent_time": 0.46}  # the fake's descent (8 cm: 0.3 s + 0.08 / 0.5 s)
 
 
 def _closed_loop(cell, params=None, **fake_args):
@@ -386,12 +401,14 @@ def _run(picker, fake, events, until, timeout=40.0):
 def test_closed_loop_each_class_ends_in_its_slot(cell, class_name):
     sim, fake, picker, events = _closed_loop(cell, seed=CLASS_NAMES.index(class_name))
     try:
-        part = sim.spawn(class_name, y_offset=0.04 * (CLASS_NAMES.index(class_name) % 3 - 1),
-                         yaw=0.3 * CLASS_NAMES.index(class_name))
+        part = sim.spawn(
+            class_name, y_offset=0.04 * (CLASS_NAMES.index(class_name) % 3 - 1), yaw=0.3 * CLASS_NAMES.index(class_name)
+        )
         _run(picker, fake, events, ("placed", "skipped", "failed", "missed"))
-        fake.sleep(1.0)                       # the released part settles
-        assert [e.event for e in events] == ["tracked", "planned", "picked", "placed"], \
-            [(e.event, e.reason) for e in events]
+        fake.sleep(1.0)  # the released part settles
+        assert [e.event for e in events] == ["tracked", "planned", "picked", "placed"], [
+            (e.event, e.reason) for e in events
+        ]
         assert len({e.track_id for e in events}) == 1 and events[0].class_name == class_name
         assert events[-1].reason == f"slot {class_name}"
         state = _state(sim, part)
@@ -409,14 +426,15 @@ def test_closed_loop_each_class_ends_in_its_slot(cell, class_name):
 
 def test_closed_loop_pick_without_an_image_after_the_lift_is_placed_but_marked_unverified(cell):
     sim, fake, picker, events = _closed_loop(cell)
-    fake.blind_after_grip = True          # e.g. the camera lost its registration mid-pick
+    fake.blind_after_grip = True  # e.g. the camera lost its registration mid-pick
     try:
         part = sim.spawn("nut_silver")
         _run(picker, fake, events, ("placed", "skipped", "failed", "missed"))
         fake.sleep(1.0)
         picked = [e for e in events if e.event == "picked"]
-        assert len(picked) == 1 and picked[0].reason.startswith("unverified: no camera image since the lift"), \
-            [(e.event, e.reason) for e in events]
+        assert len(picked) == 1 and picked[0].reason.startswith("unverified: no camera image since the lift"), [
+            (e.event, e.reason) for e in events
+        ]
         assert events[-1].event == "placed"
         assert (_state(sim, part).state, _state(sim, part).slot) == ("resting", "nut_silver")
     finally:
@@ -457,21 +475,22 @@ def test_closed_loop_stop_during_the_carry_fails_and_keeps_the_part(cell):
     def stop_after_pick(event):
         events.append(event)
         if event.event == "picked":
-            fake.fail_next_move = 15            # STOP: the next move is interrupted
+            fake.fail_next_move = 15  # STOP: the next move is interrupted
 
     picker.on_event = stop_after_pick
     try:
         part = sim.spawn("bolt_silver")
         _run(picker, fake, events, ("placed", "skipped", "failed", "missed"))
-        assert [e.event for e in events] == ["tracked", "planned", "picked", "failed"], \
-            [(e.event, e.reason) for e in events]
+        assert [e.event for e in events] == ["tracked", "planned", "picked", "failed"], [
+            (e.event, e.reason) for e in events
+        ]
         assert "move refused or interrupted" in events[-1].reason
         fake.sleep(1.0)
         # The magnet was never switched off: the part hangs on it.
         assert [on for _, on in fake.gripper_calls] == [True]
         assert sim.held == part and _state(sim, part).state == "held"
         assert picker.holding is not None
-        assert picker.run_once() is None            # the part is done: no new cycle for it
+        assert picker.run_once() is None  # the part is done: no new cycle for it
         # After the latch is released, recovery carries the held part to its slot.
         event = picker.place_held()
         fake.sleep(1.0)
@@ -487,9 +506,9 @@ def test_closed_loop_stop_during_the_lift_keeps_the_gripped_part_on_the_magnet(c
     stopped = []
 
     def stop_once_gripped(target):
-        if sim.held is not None and not stopped:          # the descent gripped the part
+        if sim.held is not None and not stopped:  # the descent gripped the part
             stopped.append(sim.held)
-            fake.fail_next_move = 15                      # STOP during the lift
+            fake.fail_next_move = 15  # STOP during the lift
 
     fake.before_move = stop_once_gripped
     try:
@@ -516,12 +535,14 @@ def test_check_segment_refuses_paths_through_the_belt_and_accepts_paths_above(ce
     clearance = 0.004
     through = check_segment([-0.3, belt.y, 0.20], [-0.3, belt.y, belt.height - 0.02], obstacles, clearance)
     assert "belt" in through
-    grazing = check_segment([-0.5, belt.y, belt.height + 0.002], [0.0, belt.y, belt.height + 0.002],
-                            obstacles, clearance)
+    grazing = check_segment(
+        [-0.5, belt.y, belt.height + 0.002], [0.0, belt.y, belt.height + 0.002], obstacles, clearance
+    )
     assert "belt" in grazing and "2.0 mm" in grazing
     assert check_segment([-0.5, belt.y, 0.20], [0.0, belt.y + 0.05, 0.15], obstacles, clearance) == ""
-    assert check_segment([-0.5, belt.y, belt.height + 0.01], [0.0, belt.y, belt.height + 0.01],
-                         obstacles, clearance) == ""
+    assert (
+        check_segment([-0.5, belt.y, belt.height + 0.01], [0.0, belt.y, belt.height + 0.01], obstacles, clearance) == ""
+    )
     # The descent onto a part: its end is allowed to come closer, its start is not.
     descent = ([-0.3, belt.y, belt.height + 0.09], [-0.29, belt.y, belt.height + 0.003])
     assert "belt" in check_segment(*descent, obstacles, clearance)
@@ -533,8 +554,15 @@ def test_check_segment_refuses_paths_through_the_belt_and_accepts_paths_above(ce
 
 # -- campaign ----------------------------------------------------------------------------------
 def _as_tuple(trial):
-    return (trial.index, trial.class_name, trial.y_offset, trial.yaw, repr(trial.belt_speed),
-            repr(trial.light_level), tuple(trial.camera_offset))
+    return (
+        trial.index,
+        trial.class_name,
+        trial.y_offset,
+        trial.yaw,
+        repr(trial.belt_speed),
+        repr(trial.light_level),
+        tuple(trial.camera_offset),
+    )
 
 
 def test_plan_trials_cycles_the_classes_and_is_reproducible():
@@ -546,7 +574,7 @@ def test_plan_trials_cycles_the_classes_and_is_reproducible():
     for trial in trials:
         assert abs(trial.y_offset) <= 0.06 and -math.pi <= trial.yaw <= math.pi
         assert math.isnan(trial.belt_speed) and trial.camera_offset == []
-    assert len({round(t.y_offset, 6) for t in trials}) == 13       # really drawn, not constant
+    assert len({round(t.y_offset, 6) for t in trials}) == 13  # really drawn, not constant
     assert all(abs(t.y_offset) <= 0.02 for t in plan_trials(20, 1, False, 0.05, max_y_offset=0.02))
 
 
@@ -572,22 +600,37 @@ def _stats_scenario():
     classes = {1: "nut_yellow", 2: "bolt_silver", 3: "washer_silver", 4: "washer_yellow"}
     for part_id, name in classes.items():
         stats.add_part(Trial(part_id - 1, name, 0.0, 0.0), part_id, now=10.0 * (part_id - 1))
-    truth = [(1, -0.30, 0.70, "belt"), (2, -0.40, 0.65, "belt"), (3, -0.50, 0.75, "belt"),
-             (4, -0.20, 0.70, "belt"), (99, -0.1, 0.7, "belt")]     # 99: not a campaign part
+    truth = [
+        (1, -0.30, 0.70, "belt"),
+        (2, -0.40, 0.65, "belt"),
+        (3, -0.50, 0.75, "belt"),
+        (4, -0.20, 0.70, "belt"),
+        (99, -0.1, 0.7, "belt"),
+    ]  # 99: not a campaign part
     # Sightings offset by known distances: 1, 2 (part 1); 3, 4 (part 2, misclassified twice,
     # right once at 5 mm); part 4 at 1 mm; a far sighting; a sighting of a held part.
-    stats.add_observation(truth, [("nut_yellow", -0.299, 0.70), ("bolt_yellow", -0.40, 0.653),
-                                  ("washer_yellow", -0.20, 0.701), ("nut_silver", 0.30, 0.0)])
+    stats.add_observation(
+        truth,
+        [
+            ("nut_yellow", -0.299, 0.70),
+            ("bolt_yellow", -0.40, 0.653),
+            ("washer_yellow", -0.20, 0.701),
+            ("nut_silver", 0.30, 0.0),
+        ],
+    )
     stats.add_observation(truth, [("nut_yellow", -0.30, 0.702), ("bolt_yellow", -0.404, 0.65)])
-    stats.add_observation([(1, -0.25, 0.70, "held"), (2, -0.40, 0.65, "belt")],
-                          [("nut_yellow", -0.25, 0.70), ("bolt_silver", -0.403, 0.654)])
-    for part_id, events in {1: ["tracked", "planned", "picked", "placed"],
-                            2: ["tracked", "planned", "picked", "placed"],
-                            4: ["tracked", "planned", "picked: unverified: no camera image since the lift",
-                                "placed"]}.items():
+    stats.add_observation(
+        [(1, -0.25, 0.70, "held"), (2, -0.40, 0.65, "belt")],
+        [("nut_yellow", -0.25, 0.70), ("bolt_silver", -0.403, 0.654)],
+    )
+    for part_id, events in {
+        1: ["tracked", "planned", "picked", "placed"],
+        2: ["tracked", "planned", "picked", "placed"],
+        4: ["tracked", "planned", "picked: unverified: no camera image since the lift", "placed"],
+    }.items():
         for event in events:
             stats.add_event(part_id, event)
-    stats.add_event(42, "picked")          # unknown part: ignored
+    stats.add_event(42, "picked")  # unknown part: ignored
     stats.resolve(1, "resting", "nut_yellow", 30.0)
     stats.resolve(2, "resting", "bolt_yellow", 40.0)
     stats.resolve(3, "gone", "", 50.0, reason="never seen")
@@ -600,12 +643,12 @@ def test_campaign_stats_on_a_hand_made_scenario():
     summary = stats.summary()
     assert summary["trials"] == 4 and summary["successes"] == 2
     assert summary["success_rate"] == pytest.approx(0.5)
-    assert summary["unmatched_detections"] == 2        # the far one and the held one
-    assert summary["unverified_picks"] == 1            # part 4's pick
-    errors = [1.0, 3.0, 1.0, 2.0, 4.0, 5.0]            # mm, as the sightings were placed
+    assert summary["unmatched_detections"] == 2  # the far one and the held one
+    assert summary["unverified_picks"] == 1  # part 4's pick
+    errors = [1.0, 3.0, 1.0, 2.0, 4.0, 5.0]  # mm, as the sightings were placed
     assert summary["pose_samples"] == len(errors)
     assert summary["pose_error_mm_p50"] == pytest.approx(2.5, abs=1e-6)
-    assert summary["pose_error_mm_p95"] == pytest.approx(4.75, abs=1e-6)   # 4 + 0.75 x (5 - 4)
+    assert summary["pose_error_mm_p95"] == pytest.approx(4.75, abs=1e-6)  # 4 + 0.75 x (5 - 4)
     # 2 successes between the first spawn (0 s) and the last resolution (70 s).
     assert summary["picks_per_minute"] == pytest.approx(2 / (70.0 / 60.0))
     # spawn -> place of the successes: 30 s (part 1) and 40 s (part 4)
@@ -616,22 +659,32 @@ def test_campaign_stats_on_a_hand_made_scenario():
     assert failures["washer_silver"]["predicted"] == UNKNOWN and failures["washer_silver"]["reason"] == "never seen"
 
     table = summary["per_class"]
-    assert table["nut_yellow"] == {"trials": 1, "detected": 1, "classified": 1, "picked": 1, "placed": 1,
-                                   "pose_error_mm_p95": pytest.approx(np.percentile([1.0, 2.0], 95))}
+    assert table["nut_yellow"] == {
+        "trials": 1,
+        "detected": 1,
+        "classified": 1,
+        "picked": 1,
+        "placed": 1,
+        "pose_error_mm_p95": pytest.approx(np.percentile([1.0, 2.0], 95)),
+    }
     row = table["bolt_silver"]
     assert (row["trials"], row["detected"], row["classified"], row["picked"], row["placed"]) == (1, 1, 0, 1, 0)
     row = table["washer_silver"]
     assert (row["trials"], row["detected"], row["classified"], row["picked"], row["placed"]) == (1, 0, 0, 0, 0)
     assert math.isnan(row["pose_error_mm_p95"])
     assert table["nut_silver"]["trials"] == 0 and table["bolt_yellow"]["trials"] == 0
-    assert table["washer_yellow"]["picked"] == 1       # an unverified pick is still a pick
+    assert table["washer_yellow"]["picked"] == 1  # an unverified pick is still a pick
 
     matrix = stats.confusion()
     labels = list(CLASS_NAMES) + [UNKNOWN]
     assert matrix.shape == (6, 7) and matrix.sum() == 4
     expected = np.zeros((6, 7), int)
-    for true, predicted in (("nut_yellow", "nut_yellow"), ("bolt_silver", "bolt_yellow"),
-                            ("washer_silver", UNKNOWN), ("washer_yellow", "washer_yellow")):
+    for true, predicted in (
+        ("nut_yellow", "nut_yellow"),
+        ("bolt_silver", "bolt_yellow"),
+        ("washer_silver", UNKNOWN),
+        ("washer_yellow", "washer_yellow"),
+    ):
         expected[CLASS_NAMES.index(true), labels.index(predicted)] += 1
     assert np.array_equal(matrix, expected)
     text = stats.table()
@@ -645,11 +698,15 @@ def test_plot_confusion_writes_a_png(tmp_path):
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000
     image = cv2.imread(str(path))
     assert image is not None and image.shape[0] > 300 and image.shape[1] > 400
-    assert [f.name for f in tmp_path.iterdir()] == ["confusion.png"]      # no temporary left over
+    assert [f.name for f in tmp_path.iterdir()] == ["confusion.png"]  # no temporary left over
 
 
 # -- VisionPipeline on rendered images ---------------------------------------------------------
-VISION_PARTS = (("nut_yellow", -0.42, 0.66, 0.4), ("bolt_silver", -0.30, 0.74, 1.1), ("washer_yellow", -0.18, 0.70, 0.0))
+VISION_PARTS = (
+    ("nut_yellow", -0.42, 0.66, 0.4),
+    ("bolt_silver", -0.30, 0.74, 1.1),
+    ("washer_yellow", -0.18, 0.70, 0.0),
+)
 
 
 @pytest.fixture(scope="module")
@@ -663,7 +720,7 @@ def rendered(cell):
             scene.add_part(name, x, y, yaw)
         camera = PinholeCamera.from_spec(cell.camera)
         moved_pose = camera.pose.copy()
-        tilt = cv2.Rodrigues(np.radians([0.6, 0.0, 0.8]))[0]      # about 1 degree
+        tilt = cv2.Rodrigues(np.radians([0.6, 0.0, 0.8]))[0]  # about 1 degree
         moved_pose[:3, :3] = tilt @ moved_pose[:3, :3]
         moved_pose[:3, 3] += [0.02, 0.0, 0.0]
         moved = camera.with_pose(moved_pose)
@@ -725,8 +782,10 @@ def _cover_markers(cell, camera, image):
     for marker in cell.markers:
         _, ratio = marker_image(marker.dictionary, marker.id)
         half = marker.size * ratio / 2 + 0.005
-        corners = (marker.pose @ np.array([[-half, half, 0, 1], [half, half, 0, 1],
-                                           [half, -half, 0, 1], [-half, -half, 0, 1]]).T).T[:, :3]
+        corners = (
+            marker.pose
+            @ np.array([[-half, half, 0, 1], [half, half, 0, 1], [half, -half, 0, 1], [-half, -half, 0, 1]]).T
+        ).T[:, :3]
         cv2.fillConvexPoly(covered, np.round(camera.project(corners)).astype(np.int32), (128, 128, 128))
     return covered
 
@@ -755,10 +814,13 @@ def test_pipeline_rejects_corrupt_images(cell, rendered):
     camera = rendered["camera"]
     pipeline = _pipeline(cell, camera)
     rng = np.random.default_rng(3)
-    bad_images = (None, np.zeros((camera.height, camera.width, 3), np.uint8),          # blank
-                  rng.integers(0, 255, (camera.height // 2, camera.width // 2, 3), dtype=np.uint8),   # wrong size
-                  rng.integers(0, 255, (camera.height, camera.width), dtype=np.uint8),  # grey
-                  rendered["image"].astype(np.float32))                                 # wrong dtype
+    bad_images = (
+        None,
+        np.zeros((camera.height, camera.width, 3), np.uint8),  # blank
+        rng.integers(0, 255, (camera.height // 2, camera.width // 2, 3), dtype=np.uint8),  # wrong size
+        rng.integers(0, 255, (camera.height, camera.width), dtype=np.uint8),  # grey
+        rendered["image"].astype(np.float32),
+    )  # wrong dtype
     for k, bad in enumerate(bad_images):
         result = pipeline.process(bad, float(k))
         assert not result.ok and result.parts == [] and result.reason.startswith("corrupt image"), result.reason

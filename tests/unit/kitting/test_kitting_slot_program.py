@@ -6,6 +6,7 @@ mode's state machine) with known offsets from the YAML slots; further programs a
 here the same way. The closed loop places parts with the taught slots in the simulated
 cell, whose tray is still the YAML one.
 """
+
 import math
 import os
 
@@ -13,19 +14,26 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ..conftest import DATA
 from kitting.cell import load_cell
 from kitting.parts import CLASS_NAMES
 from kitting.slot_program import SlotProgramError, magnet_point, slots_from_program, tool_tilt_deg
 from motion_apps.teach import TeachSession
 from motion_commander.program import Program, Waypoint, load_program
+
+from ..conftest import DATA
 from .test_kitting_cell import _closed_loop, _run, _state
 
 TAUGHT = os.path.join(DATA, "kitting_taught_slots.yaml")
 DOWN = [1.0, 0.0, 0.0, 0.0]
 # The offsets make_kitting_slot_program.py taught (m, from the YAML slot centre).
-TAUGHT_OFFSETS = {"bolt_yellow": (0.006, -0.004), "nut_yellow": (-0.005, 0.007), "washer_yellow": (0.008, 0.003),
-                  "bolt_silver": (-0.007, -0.006), "nut_silver": (0.004, 0.008), "washer_silver": (-0.003, -0.008)}
+TAUGHT_OFFSETS = {
+    "bolt_yellow": (0.006, -0.004),
+    "nut_yellow": (-0.005, 0.007),
+    "washer_yellow": (0.008, 0.003),
+    "bolt_silver": (-0.007, -0.006),
+    "nut_silver": (0.004, 0.008),
+    "washer_silver": (-0.003, -0.008),
+}
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +70,7 @@ def test_the_shipped_taught_program_gives_every_slot_its_taught_centre(cell):
         yaml_center = cell.tray.slot_for(class_name).center
         center = taught.cell.tray.slot_for(class_name).center
         np.testing.assert_allclose(center[:2] - yaml_center[:2], TAUGHT_OFFSETS[class_name], atol=1e-4)
-        assert center[2] == pytest.approx(yaml_center[2])      # the floor stays the tray's
+        assert center[2] == pytest.approx(yaml_center[2])  # the floor stays the tray's
         assert taught.sources[class_name].startswith("taught release")
         assert taught.offsets[class_name] == pytest.approx(math.hypot(*TAUGHT_OFFSETS[class_name]), abs=1e-4)
     # The input cell is not modified, and the tray's geometry (path checks) is unchanged.
@@ -103,22 +111,26 @@ def test_magnet_point_is_tcp_length_along_the_tool_z_axis():
 def test_a_release_named_after_a_class_is_that_class_slot(cell):
     # 30 mm off the bolt_yellow slot toward its neighbour, but named for bolt_yellow.
     bolt = cell.tray.slot_for("bolt_yellow").center
-    nearest_other = min((s for s in cell.tray.slots if s.part_class != "bolt_yellow"),
-                        key=lambda s: np.linalg.norm(s.center[:2] - bolt[:2]))
+    nearest_other = min(
+        (s for s in cell.tray.slots if s.part_class != "bolt_yellow"),
+        key=lambda s: np.linalg.norm(s.center[:2] - bolt[:2]),
+    )
     direction = (nearest_other.center[:2] - bolt[:2]) / np.linalg.norm(nearest_other.center[:2] - bolt[:2])
     point = bolt[:2] + 0.03 * direction
     tool = [point[0], point[1], 0.3]
-    program = Program(cell.robot, waypoints=[
-        Waypoint("release_bolt_yellow", tool, DOWN, [0.0] * 6, "release")])
+    program = Program(cell.robot, waypoints=[Waypoint("release_bolt_yellow", tool, DOWN, [0.0] * 6, "release")])
     taught = slots_from_program(cell, program, "named.yaml")
     np.testing.assert_allclose(taught.cell.tray.slot_for("bolt_yellow").center[:2], point, atol=1e-9)
     assert taught.sources[nearest_other.part_class] == "cell YAML"
 
 
-@pytest.mark.parametrize("change, message", [
-    (dict(robot="ur5e"), "taught on robot 'ur5e'"),
-    (dict(tool_frame="flange"), "poses are of 'flange'"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (dict(robot="ur5e"), "taught on robot 'ur5e'"),
+        (dict(tool_frame="flange"), "poses are of 'flange'"),
+    ],
+)
 def test_a_program_of_another_robot_or_tool_frame_is_refused(cell, change, message):
     program = load_program(TAUGHT)
     for key, value in change.items():
@@ -132,8 +144,11 @@ def test_refusals_name_the_file_the_waypoint_and_what_to_do(cell, tmp_path):
     # Beyond the tray's edge, 5 cm past its outer slots.
     outside = cell.tray.position[1] - cell.tray.size[1] / 2 - 0.05
     far = _teach(cell, [(cell.tray.position[0], outside, DOWN)], tmp_path / "far")
-    with pytest.raises(SlotProgramError, match=r"far.*slots.yaml: waypoint 'release2': released at .* mm from the "
-                                               r".* slot .*release over the slot"):
+    with pytest.raises(
+        SlotProgramError,
+        match=r"far.*slots.yaml: waypoint 'release2': released at .* mm from the "
+        r".* slot .*release over the slot",
+    ):
         slots_from_program(cell, load_program(far), far)
     twice = _teach(cell, [(nut[0], nut[1], DOWN), (nut[0] + 0.005, nut[1], DOWN)], tmp_path / "twice")
     with pytest.raises(SlotProgramError, match="a second release for the nut_silver slot .*'release2'.*delete one"):

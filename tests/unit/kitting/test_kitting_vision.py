@@ -1,5 +1,6 @@
 """Kitting cell foundations: cell YAML, camera model vs rendering, calibration (ChArUco
 intrinsics, marker extrinsics), detector and pixel-to-belt geometry on rendered images."""
+
 import math
 
 import cv2
@@ -9,7 +10,7 @@ import pytest
 
 from kitting.calibration import BoardSpec, calibrate_intrinsics, extrinsics_from_marker, pose_error
 from kitting.camera import PinholeCamera, render
-from kitting.cell import load_cell, cell_from_dict
+from kitting.cell import cell_from_dict, load_cell
 from kitting.detector import ClassicalDetector
 from kitting.geometry import pixel_to_belt, pixels_to_plane
 from kitting.parts import CLASS_NAMES, PART_CLASSES
@@ -74,8 +75,9 @@ def test_charuco_intrinsics_within_one_percent(client):
     camera = PinholeCamera(640, 480, np.array([[600.0, 0, 319.5], [0, 600.0, 239.5], [0, 0, 1]]))
     images = render_board_views(client, spec, camera, 10)
     result = calibrate_intrinsics(images, spec)
-    print(f"ChArUco: fx {result.fx:.2f} fy {result.fy:.2f} (true 600) rms {result.rms:.3f} px, "
-          f"{result.views_used} views")
+    print(
+        f"ChArUco: fx {result.fx:.2f} fy {result.fy:.2f} (true 600) rms {result.rms:.3f} px, {result.views_used} views"
+    )
     assert abs(result.fx / 600.0 - 1) < 0.01 and abs(result.fy / 600.0 - 1) < 0.01
     assert result.rms < 1.0
 
@@ -85,13 +87,18 @@ def test_marker_extrinsics_recover_the_camera_pose(client, cell, scene):
     image = render(client, camera, supersample=2)
     result = extrinsics_from_marker(image, cell.markers, camera.K, camera.distortion)
     position_error, angle_error = pose_error(result.T_base_cam, camera.pose)
-    print(f"marker extrinsics: {1000 * position_error:.2f} mm, {angle_error:.3f} deg, "
-          f"reprojection {result.reprojection_px:.3f} px")
+    print(
+        f"marker extrinsics: {1000 * position_error:.2f} mm, {angle_error:.3f} deg, "
+        f"reprojection {result.reprojection_px:.3f} px"
+    )
     assert result.ok and result.used == [7, 8]
     assert position_error < 0.003 and angle_error < 0.3
     estimated = camera.with_pose(result.T_base_cam)
-    points = np.c_[np.random.default_rng(1).uniform(-0.55, -0.05, 30), np.random.default_rng(2).uniform(0.6, 0.8, 30),
-                   np.full(30, cell.belt.height)]
+    points = np.c_[
+        np.random.default_rng(1).uniform(-0.55, -0.05, 30),
+        np.random.default_rng(2).uniform(0.6, 0.8, 30),
+        np.full(30, cell.belt.height),
+    ]
     errors = np.linalg.norm(pixels_to_plane(estimated, camera.project(points), cell.belt.height) - points, axis=1)
     assert np.percentile(errors, 95) < 0.002
 
@@ -108,10 +115,10 @@ def test_a_marker_reaching_the_image_border_is_reported_partly_hidden(cell):
     marker = cell.markers[0]
     dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, marker.dictionary))
     image = np.full((480, 640), 255, np.uint8)
-    image[3:123, 300:420] = cv2.aruco.generateImageMarker(dictionary, marker.id, 120)   # 3 px from the top
+    image[3:123, 300:420] = cv2.aruco.generateImageMarker(dictionary, marker.id, 120)  # 3 px from the top
     found = extrinsics_from_marker(image, cell.markers, camera.K, camera.distortion, require_all=True)
     assert not found.ok and found.partly_hidden == [marker.id]
-    assert [i for i, _ in found.missing] == [m.id for m in cell.markers]   # the other one is not in view
+    assert [i for i, _ in found.missing] == [m.id for m in cell.markers]  # the other one is not in view
     blank = extrinsics_from_marker(np.full((480, 640), 255, np.uint8), cell.markers, camera.K, camera.distortion)
     assert not blank.ok and blank.partly_hidden == []
 
@@ -149,18 +156,23 @@ def test_detector_classifies_each_class_and_locates_it(client, cell, scene):
 
 def test_detector_rejects_corrupt_images():
     detector = ClassicalDetector()
-    for bad in (None, np.zeros((0, 0, 3), np.uint8), np.zeros((240, 320), np.float32),
-                np.zeros((240, 320, 3), np.uint8)):
+    for bad in (
+        None,
+        np.zeros((0, 0, 3), np.uint8),
+        np.zeros((240, 320), np.float32),
+        np.zeros((240, 320, 3), np.uint8),
+    ):
         result = detector.detect(bad)
         assert result.corrupt and not result.detections
 
 
 def test_detector_rejects_edge_parts_and_unknown_objects(client, cell, scene):
     camera, vision = _vision(cell)
-    scene.add_part("nut_yellow", -0.35, cell.belt.y + cell.belt.width / 2)        # on the belt edge
-    scene.add_foreign_object(x=-0.2, y=cell.belt.y)                                # red box
-    scene.add_foreign_object(half_extents=(0.025, 0.025, 0.005), x=-0.45, y=cell.belt.y,
-                             rgba=(0.78, 0.78, 0.8, 1))                             # silver plate
+    scene.add_part("nut_yellow", -0.35, cell.belt.y + cell.belt.width / 2)  # on the belt edge
+    scene.add_foreign_object(x=-0.2, y=cell.belt.y)  # red box
+    scene.add_foreign_object(
+        half_extents=(0.025, 0.025, 0.005), x=-0.45, y=cell.belt.y, rgba=(0.78, 0.78, 0.8, 1)
+    )  # silver plate
     observations, result = vision.observe(render(client, camera))
     assert observations == []
     reasons = sorted(r.reason for r in result.rejections)
@@ -190,8 +202,7 @@ def test_detector_classifies_nuts_of_both_colours_at_any_yaw_far_from_the_camera
             for name, x in truth:
                 seen = [o for o in observations if math.hypot(o.x - x, o.y - y) < 0.003]
                 if [o.class_name for o in seen] != [name]:
-                    failures.append((name, x, yaw, [o.class_name for o in seen],
-                                     [r.detail for r in result.rejections]))
+                    failures.append((name, x, yaw, [o.class_name for o in seen], [r.detail for r in result.rejections]))
     assert failures == []
 
 
@@ -201,8 +212,12 @@ def test_detector_rejects_look_alikes_of_nuts_and_bolts(client, cell, scene):
     a 20 x 20 x 2 mm tile; far from the nadir (largest parallax) and near it."""
     camera, vision = _vision(cell, 640, 480)
     silver, yellow = PART_CLASSES["nut_silver"].rgba, PART_CLASSES["nut_yellow"].rgba
-    objects = [((0.0075,) * 3, silver), ((0.009,) * 3, yellow), ((0.0225, 0.0065, 0.0065), silver),
-               ((0.01, 0.01, 0.001), yellow)]
+    objects = [
+        ((0.0075,) * 3, silver),
+        ((0.009,) * 3, yellow),
+        ((0.0225, 0.0065, 0.0065), silver),
+        ((0.01, 0.01, 0.001), yellow),
+    ]
     for y in (0.78, 0.62):
         for x, (half_extents, rgba) in zip((-0.50, -0.38, -0.22, -0.10), objects):
             scene.add_foreign_object(half_extents=half_extents, x=x, y=y, yaw=0.4, rgba=rgba)
@@ -214,6 +229,7 @@ def test_detector_rejects_look_alikes_of_nuts_and_bolts(client, cell, scene):
 
 def test_shape_envelope_comes_from_the_parts_dimensions():
     from kitting.detector import hull_widths, shape_envelope
+
     nut = PART_CLASSES["nut_silver"]
     envelope = shape_envelope(nut, 0.8)
     assert envelope["width_min_mm"] == pytest.approx((18.0, 18.0 * 2 / math.sqrt(3)))

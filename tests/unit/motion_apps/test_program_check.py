@@ -1,4 +1,5 @@
 """motion_apps.program_check: robot, limits, IK, fence and static-scene collisions, with reasons."""
+
 import copy
 import os
 import sys
@@ -12,18 +13,22 @@ APPS = os.path.join(ROOT, "src", "motion_apps")
 if APPS not in sys.path:
     sys.path.insert(0, APPS)
 
+from motion_apps.program_check import ProgramChecker, check_params, load_check_params, load_scene_file  # noqa: E402
 from motion_commander.program import Program, Waypoint  # noqa: E402
-from motion_apps.program_check import (ProgramChecker, check_params, load_check_params,  # noqa: E402
-                                       load_scene_file)
 from motion_common.errors import ParameterError  # noqa: E402
 from motion_common.kinematics import RobotKinematics, pose_to_se3  # noqa: E402
 
 SCENE = os.path.join(ROOT, "src", "hw_interface", "config", "scenes", "table_parts.yaml")
 CONFIG = os.path.join(APPS, "config", "program_check.yaml")
 DOWN = [1.0, 0.0, 0.0, 0.0]
-PICK_PLACE = [("start_above", (-0.45, -0.20, 0.20), "none"), ("pick", (-0.45, -0.20, 0.045), "grip"),
-              ("lift", (-0.45, -0.20, 0.20), "none"), ("place_above", (-0.30, -0.25, 0.20), "none"),
-              ("place", (-0.30, -0.25, 0.045), "release"), ("retreat", (-0.30, -0.25, 0.20), "none")]
+PICK_PLACE = [
+    ("start_above", (-0.45, -0.20, 0.20), "none"),
+    ("pick", (-0.45, -0.20, 0.045), "grip"),
+    ("lift", (-0.45, -0.20, 0.20), "none"),
+    ("place_above", (-0.30, -0.25, 0.20), "none"),
+    ("place", (-0.30, -0.25, 0.045), "release"),
+    ("retreat", (-0.30, -0.25, 0.20), "none"),
+]
 
 
 def taught(points=PICK_PLACE, robot="ur5e"):
@@ -145,13 +150,16 @@ def test_the_arm_through_the_teach_table_is_a_collision_even_at_the_zero_pose():
     try:
         kin = RobotKinematics(UR5E)
         position, orientation = kin.forward_pose(np.zeros(6))
-        program = Program(robot="ur5e", waypoints=[Waypoint("stretched", list(position), list(orientation),
-                                                            [0.0] * 6, "none", 0.5)])
+        program = Program(
+            robot="ur5e", waypoints=[Waypoint("stretched", list(position), list(orientation), [0.0] * 6, "none", 0.5)]
+        )
         report = checker.check(program)
         assert not report.ok and "table" in report.text(), report.text()
         home_position, home_orientation = kin.forward_pose(HOME)
-        fine = Program(robot="ur5e", waypoints=[Waypoint("home", list(home_position), list(home_orientation),
-                                                         list(HOME), "none", 0.5)])
+        fine = Program(
+            robot="ur5e",
+            waypoints=[Waypoint("home", list(home_position), list(home_orientation), list(HOME), "none", 0.5)],
+        )
         assert checker.check(fine).ok, checker.check(fine).text()
     finally:
         checker.close()

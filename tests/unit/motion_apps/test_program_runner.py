@@ -1,5 +1,6 @@
 """motion_apps.program_runner with a fake controller: the client's methods, HwInterfaceError
 with .result on refusal. Stops mid-program (INTERRUPTED, LATCHED_STOP), refusals, dry run."""
+
 import os
 import subprocess
 import sys
@@ -16,6 +17,7 @@ from hw_interface.errors import HwInterfaceError  # noqa: E402
 from hw_interface.protocol import Result  # noqa: E402
 from motion_apps.program_check import ProgramChecker  # noqa: E402
 from motion_apps.program_runner import EXIT_OK, EXIT_REFUSED, EXIT_STOPPED, ProgramRunner  # noqa: E402
+
 from .test_program_check import taught  # noqa: E402
 
 
@@ -95,12 +97,12 @@ def test_a_whole_program_runs_in_order(checker):
 
 @pytest.mark.parametrize("result", [Result.INTERRUPTED, Result.LATCHED_STOP, Result.DRIVER_FAULT])
 def test_a_stop_mid_program_ends_the_run_at_that_waypoint(checker, result):
-    controller = FakeController(fail_at=(4, result))   # the 4th motion: MoveL to place_above
+    controller = FakeController(fail_at=(4, result))  # the 4th motion: MoveL to place_above
     outcome, lines = run(controller, checker)
     assert not outcome.ok and outcome.exit_code == EXIT_STOPPED
     assert outcome.result == result
     assert (outcome.stopped_index, outcome.stopped_name, outcome.done) == (3, "place_above", 3)
-    assert controller.calls[-1][0] == "move_l" and controller.motions == 4   # nothing after the stop
+    assert controller.calls[-1][0] == "move_l" and controller.motions == 4  # nothing after the stop
     assert [c for c in controller.calls if c == ("set_gripper", False)] == []  # the part is not dropped
     assert f"4/6 place_above MoveL (speed 0.50) ... {result.name}" in lines[-3]
     assert "stopped at waypoint 4/6 'place_above' (index 3)" == lines[-2]
@@ -117,6 +119,7 @@ def test_a_gripper_failure_ends_the_run_too(checker):
     class GripFails(FakeController):
         def set_gripper(self, closed):
             raise HwInterfaceError("SET_GRIPPER refused: NOT_CONNECTED", Result.NOT_CONNECTED)
+
     outcome, _ = run(GripFails(), checker)
     assert (outcome.result, outcome.stopped_name, outcome.done) == (Result.NOT_CONNECTED, "pick", 1)
 
@@ -167,9 +170,16 @@ def test_run_program_help_is_honest_about_speed():
     node = os.path.join(APPS, "nodes", "run_program")
     out = subprocess.run([sys.executable, node, "--help"], capture_output=True, text=True, timeout=30)
     assert out.returncode == 0, out.stderr
-    for text in ("--dry-run", "--speed", "--robot", "--urdf", "--scene", "NOT sent to the robot",
-                 "INTERRUPTED", "LATCHED_STOP"):
+    for text in (
+        "--dry-run",
+        "--speed",
+        "--robot",
+        "--urdf",
+        "--scene",
+        "NOT sent to the robot",
+        "INTERRUPTED",
+        "LATCHED_STOP",
+    ):
         assert text in out.stdout
-    bad = subprocess.run([sys.executable, node, "x.yaml", "--speed", "1.5"], capture_output=True, text=True,
-                         timeout=30)
+    bad = subprocess.run([sys.executable, node, "x.yaml", "--speed", "1.5"], capture_output=True, text=True, timeout=30)
     assert bad.returncode == 2 and "--speed must be in (0, 1]" in bad.stderr

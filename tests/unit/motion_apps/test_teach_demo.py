@@ -1,5 +1,6 @@
 """The teach demo's pieces without ROS: the shipped teaching stream, the gestures it makes
 through the recognizer and teach mode, and the report."""
+
 import gzip
 import json
 import os
@@ -9,12 +10,13 @@ import numpy as np
 import pytest
 import yaml
 
-from ..conftest import ROOT
-from motion_commander.program import load_program
 from motion_apps.teach import TeachSession, load_gesture_config
 from motion_apps.teach_report import placement_error, plot_taught_path, taught_place, write_summary
+from motion_commander.program import load_program
 from motion_sensor.gestures.gesture_frame import frames_from_recording
 from motion_sensor.gestures.gesture_recognizer import GestureRecognizer
+
+from ..conftest import ROOT
 
 sys.path.insert(0, os.path.join(ROOT, "tests", "tools"))
 import make_teach_stream  # noqa: E402
@@ -52,9 +54,14 @@ def taught(tmp_path_factory):
     frames = frames_from_recording(STREAM)
     origin = frames[0].palm
     state = {}
-    session = TeachSession("ur5e", lambda: state.get("now"), programs_dir=str(tmp_path_factory.mktemp("programs")),
-                           program_name="taught", config=load_gesture_config(
-                               os.path.join(APPS_CONFIG, "gesture_commands.yaml")), clock=lambda: 0.0)
+    session = TeachSession(
+        "ur5e",
+        lambda: state.get("now"),
+        programs_dir=str(tmp_path_factory.mktemp("programs")),
+        program_name="taught",
+        config=load_gesture_config(os.path.join(APPS_CONFIG, "gesture_commands.yaml")),
+        clock=lambda: 0.0,
+    )
     feedback = []
     for frame in frames:
         tool = make_teach_stream.START + (frame.palm - origin)
@@ -88,8 +95,13 @@ def test_report_measures_in_the_table_plane_and_plots(taught, tmp_path):
     program = load_program(session.saved_path)
     place = taught_place(program)
     assert placement_error(program, place + [0.003, -0.004, 0.05]) == pytest.approx(0.005)
-    png = plot_taught_path(str(tmp_path / "path.png"), [(0.0, *place), (1.0, *(place + 0.01))], program,
-                           part_start=place - 0.1, part_end=place)
+    png = plot_taught_path(
+        str(tmp_path / "path.png"),
+        [(0.0, *place), (1.0, *(place + 0.01))],
+        program,
+        part_start=place - 0.1,
+        part_end=place,
+    )
     assert os.path.getsize(png) > 10000
     summary = write_summary(str(tmp_path / "out" / "teach_summary.json"), {"placement_error_mm": 5.0})
     assert json.load(open(summary)) == {"placement_error_mm": 5.0}

@@ -1,4 +1,5 @@
 """motion_apps.teach: gesture events and robot poses in, waypoints and operator feedback out."""
+
 import os
 import sys
 
@@ -10,9 +11,8 @@ APPS = os.path.join(ROOT, "src", "motion_apps")
 if APPS not in sys.path:
     sys.path.insert(0, APPS)
 
+from motion_apps.teach import DEFAULT_GESTURES, TeachSession, check_gesture_config, load_gesture_config  # noqa: E402
 from motion_commander.program import load_program  # noqa: E402
-from motion_apps.teach import (DEFAULT_GESTURES, TeachSession, check_gesture_config,  # noqa: E402
-                               load_gesture_config)
 from motion_common.errors import ParameterError  # noqa: E402
 
 CONFIG = os.path.join(APPS, "config", "gesture_commands.yaml")
@@ -40,9 +40,15 @@ def robot():
 
 @pytest.fixture
 def session(robot, tmp_path):
-    clock = iter(range(1000, 100000, 10)).__next__   # 10 s between events: no repeat guard
-    return TeachSession("ur5e", robot, programs_dir=str(tmp_path / "programs"), program_name="demo",
-                        config=load_gesture_config(CONFIG), clock=clock)
+    clock = iter(range(1000, 100000, 10)).__next__  # 10 s between events: no repeat guard
+    return TeachSession(
+        "ur5e",
+        robot,
+        programs_dir=str(tmp_path / "programs"),
+        program_name="demo",
+        config=load_gesture_config(CONFIG),
+        clock=clock,
+    )
 
 
 def test_the_shipped_config_maps_the_issue_gestures():
@@ -121,7 +127,7 @@ def test_undo_removes_the_last_waypoint_and_its_gripper_state(session, robot):
     undo = session.on_gesture("swipe_left")
     assert undo.understood and "removed waypoint 2 'grip2'; 1 left" == str(undo)
     assert not session.gripping
-    assert session.on_gesture("fist").understood   # can grip again
+    assert session.on_gesture("fist").understood  # can grip again
 
 
 def test_invalid_poses_are_not_recorded(session, robot):
@@ -130,6 +136,7 @@ def test_invalid_poses_are_not_recorded(session, robot):
 
     def broken():
         raise RuntimeError("tf timeout")
+
     session.robot_state = broken
     assert "tf timeout" in str(session.on_gesture("hold_still"))
     assert session.waypoints == []

@@ -1,4 +1,5 @@
 """Live settings from the dashboard: a speed-ratio change and a filter switch must not move the tool."""
+
 import numpy as np
 import pytest
 
@@ -23,7 +24,7 @@ def test_ratio_change_keeps_the_target_and_scales_motion_from_then_on():
     np.testing.assert_allclose(before, [0.6, 0.1, 0.4])
     mapper.set_speed_ratio(0.25)
     same, _ = mapper.target([0.10, 0.0, 0.0], IDENTITY)
-    np.testing.assert_allclose(same, before, atol=1e-12)       # the change itself moves nothing
+    np.testing.assert_allclose(same, before, atol=1e-12)  # the change itself moves nothing
     after, _ = mapper.target([0.18, 0.0, 0.0], IDENTITY)
     np.testing.assert_allclose(after - same, [0.02, 0.0, 0.0], atol=1e-12)  # 8 cm of hand -> 2 cm of tool
 
@@ -70,7 +71,7 @@ def run(sequencer, start, count, x0, step, dt=0.01):
 @pytest.mark.parametrize("new_filter", ["one_euro", "kalman", "mean"])
 def test_filter_switch_keeps_the_output_continuous(new_filter):
     sequencer = Sequencer(SequencerConfig(filter_name="mean", filter_params={"queue_size": 10}, entry_trim_frames=0))
-    moving = run(sequencer, 100.0, 40, 0.0, 0.002)            # 0.2 m/s: the mean filter lags ~9 mm
+    moving = run(sequencer, 100.0, 40, 0.0, 0.002)  # 0.2 m/s: the mean filter lags ~9 mm
     last = moving[-1].position
     params = filter_params_for(SEQUENCER_PARAMS.defaults(), new_filter)
     sequencer.set_filter(new_filter, params)

@@ -1,15 +1,17 @@
 """The paper's API, the motion vocabulary and pick-and-place, on the real simulation driver."""
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ..conftest import HOME, UR5E
 from hw_interface.dispatcher import CommandDispatcher
 from hw_interface.errors import HwInterfaceError
 from hw_interface.protocol import CommandIndex, Result
 from hw_interface.sim_driver import PybulletSimDriver
 from motion_commander.errors import MotionCommanderError
 from motion_commander.manipulation import ManipulationAPI
+
+from ..conftest import HOME, UR5E
 
 
 class DispatcherController:
@@ -43,8 +45,10 @@ class DispatcherController:
 
 @pytest.fixture(scope="module")
 def setup():
-    scene = [{"name": "floor", "urdf": "plane.urdf", "fixed": True},
-             {"name": "part", "box": [0.02, 0.02, 0.02], "mass": 0.05, "position": [-0.45, -0.20, 0.02]}]
+    scene = [
+        {"name": "floor", "urdf": "plane.urdf", "fixed": True},
+        {"name": "part", "box": [0.02, 0.02, 0.02], "mass": 0.05, "position": [-0.45, -0.20, 0.02]},
+    ]
     sim = PybulletSimDriver(UR5E, initial_joints=HOME, real_time=False, scene=scene)
     sim.login()
     api = ManipulationAPI(DispatcherController(CommandDispatcher(sim)))

@@ -1,4 +1,5 @@
 """When the core prepares its between-frames work (motion_commander.prepare_timing)."""
+
 import numpy as np
 import pytest
 
@@ -11,7 +12,7 @@ def test_prepares_lead_before_the_median_period_of_a_jittery_stream():
     timing = PrepareTiming(lead_s=0.0015)
     arrival = 100.0
     for _ in range(40):
-        arrival += 0.0091 + rng.uniform(-0.0004, 0.0004)   # a 110 Hz device with jitter
+        arrival += 0.0091 + rng.uniform(-0.0004, 0.0004)  # a 110 Hz device with jitter
         timing.on_frame(arrival)
     assert timing.period == pytest.approx(0.0091, abs=0.0003)
     assert timing.prepare_at() == pytest.approx(arrival + timing.period - 0.0015)
@@ -23,9 +24,9 @@ def test_one_late_frame_and_a_pause_do_not_move_the_prediction():
     for _ in range(20):
         arrival += 0.01
         timing.on_frame(arrival)
-    arrival += 0.5          # the hand left: not a frame period
+    arrival += 0.5  # the hand left: not a frame period
     timing.on_frame(arrival)
-    arrival += 0.03         # one late frame
+    arrival += 0.03  # one late frame
     timing.on_frame(arrival)
     assert timing.period == pytest.approx(0.01)
     assert timing.prepare_at() == pytest.approx(arrival + 0.009)
@@ -34,7 +35,7 @@ def test_one_late_frame_and_a_pause_do_not_move_the_prediction():
 def test_learns_a_new_rate():
     timing = PrepareTiming(lead_s=0.001, window=9)
     arrival = 0.0
-    for period in [0.009] * 20 + [0.02] * 9:   # the device switched to 50 Hz
+    for period in [0.009] * 20 + [0.02] * 9:  # the device switched to 50 Hz
         arrival += period
         timing.on_frame(arrival)
     assert timing.period == pytest.approx(0.02)
@@ -45,7 +46,7 @@ def test_prepares_at_once_until_the_rate_is_known_or_without_a_lead():
     assert timing.prepare_at() is None
     for arrival in (0.0, 0.01, 0.02):
         timing.on_frame(arrival)
-    assert timing.prepare_at() is None          # two intervals: not yet
+    assert timing.prepare_at() is None  # two intervals: not yet
     timing.on_frame(0.03)
     assert timing.prepare_at() == pytest.approx(0.0385)
     off = PrepareTiming(lead_s=0.0)

@@ -1,4 +1,5 @@
 """motion_commander.program: validation with clear errors, round trip, and crash-safe saving."""
+
 import os
 import random
 import signal
@@ -22,9 +23,20 @@ JOINTS = [0.1, -1.4, 1.6, -1.8, -1.57, 0.1]
 
 
 def make_program(count=3, robot="ur5e", tag="a"):
-    return Program(robot=robot, waypoints=[
-        Waypoint(f"{tag}{i}", [-0.4, -0.2 + 0.01 * i, 0.2], [1.0, 0.0, 0.0, 0.0], list(JOINTS),
-                 ["none", "grip", "release"][i % 3], 0.5) for i in range(count)])
+    return Program(
+        robot=robot,
+        waypoints=[
+            Waypoint(
+                f"{tag}{i}",
+                [-0.4, -0.2 + 0.01 * i, 0.2],
+                [1.0, 0.0, 0.0, 0.0],
+                list(JOINTS),
+                ["none", "grip", "release"][i % 3],
+                0.5,
+            )
+            for i in range(count)
+        ],
+    )
 
 
 def write(tmp_path, data, name="p.yaml"):
@@ -41,23 +53,26 @@ def test_round_trip(tmp_path):
     assert "format_version: 1" in open(path).read()
 
 
-@pytest.mark.parametrize("mutate, expected", [
-    (lambda d: d.pop("robot"), "missing ['robot']"),
-    (lambda d: d.update(format_version=2), "format_version 2 is not supported"),
-    (lambda d: d.update(colour="red"), "unknown parameter 'colour'"),
-    (lambda d: d.update(waypoints=[]), "no waypoints"),
-    (lambda d: d["waypoints"][1].pop("joints"), "waypoint 1 ('a1'): missing ['joints']"),
-    (lambda d: d["waypoints"][1]["pose"].pop("orientation"), "waypoint 1 ('a1'): missing ['pose.orientation']"),
-    (lambda d: d["waypoints"][2].update(action="drop"), "waypoint 2 ('a2')"),
-    (lambda d: d["waypoints"][0].update(speed=0.0), "parameter 'speed' (1) must be in (0, 1]"),
-    (lambda d: d["waypoints"][0].update(speed=1.5), "must be in (0, 1]"),
-    (lambda d: d["waypoints"][1]["pose"].update(position=[0.1, 0.2]), "must have 3 values"),
-    (lambda d: d["waypoints"][1]["pose"].update(orientation=[1, 1, 0, 0]), "not a unit quaternion"),
-    (lambda d: d["waypoints"][1].update(joints=[0.0, float("nan"), 0, 0, 0, 0]), "finite numbers"),
-    (lambda d: d["waypoints"][1].update(joints=[0.0] * 5), "waypoint 1 ('a1'): 5 joints, waypoint 0 has 6"),
-    (lambda d: d["waypoints"][2].update(name="a0"), "name 'a0' already used by waypoint 0"),
-    (lambda d: d["waypoints"][1].update(grip=True), "unknown parameter 'grip'"),
-])
+@pytest.mark.parametrize(
+    "mutate, expected",
+    [
+        (lambda d: d.pop("robot"), "missing ['robot']"),
+        (lambda d: d.update(format_version=2), "format_version 2 is not supported"),
+        (lambda d: d.update(colour="red"), "unknown parameter 'colour'"),
+        (lambda d: d.update(waypoints=[]), "no waypoints"),
+        (lambda d: d["waypoints"][1].pop("joints"), "waypoint 1 ('a1'): missing ['joints']"),
+        (lambda d: d["waypoints"][1]["pose"].pop("orientation"), "waypoint 1 ('a1'): missing ['pose.orientation']"),
+        (lambda d: d["waypoints"][2].update(action="drop"), "waypoint 2 ('a2')"),
+        (lambda d: d["waypoints"][0].update(speed=0.0), "parameter 'speed' (1) must be in (0, 1]"),
+        (lambda d: d["waypoints"][0].update(speed=1.5), "must be in (0, 1]"),
+        (lambda d: d["waypoints"][1]["pose"].update(position=[0.1, 0.2]), "must have 3 values"),
+        (lambda d: d["waypoints"][1]["pose"].update(orientation=[1, 1, 0, 0]), "not a unit quaternion"),
+        (lambda d: d["waypoints"][1].update(joints=[0.0, float("nan"), 0, 0, 0, 0]), "finite numbers"),
+        (lambda d: d["waypoints"][1].update(joints=[0.0] * 5), "waypoint 1 ('a1'): 5 joints, waypoint 0 has 6"),
+        (lambda d: d["waypoints"][2].update(name="a0"), "name 'a0' already used by waypoint 0"),
+        (lambda d: d["waypoints"][1].update(grip=True), "unknown parameter 'grip'"),
+    ],
+)
 def test_invalid_programs_are_refused_naming_file_and_waypoint(tmp_path, mutate, expected):
     data = make_program().to_dict()
     mutate(data)

@@ -1,14 +1,23 @@
 """Every teleop safety rule on its own, then inside TeleopCore."""
+
 import numpy as np
 import pytest
 
-from ..conftest import HOME, ROOT, UR5E
 from motion_commander.errors import MotionCommanderError
-from motion_common.kinematics import RobotKinematics, pose_to_se3
-from motion_commander.safety import (EngageRamp, JointLimitMargin, JointStepLimiter, SingularityGuard,
-                                     StaleCommandWatchdog, WorkspaceFence, condition_number)
+from motion_commander.safety import (
+    EngageRamp,
+    JointLimitMargin,
+    JointStepLimiter,
+    SingularityGuard,
+    StaleCommandWatchdog,
+    WorkspaceFence,
+    condition_number,
+)
 from motion_commander.teleop import ButtonClutch, GestureClutch, TeleopMapper, make_clutch
 from motion_commander.teleop_core import Action, SafetyConfig, TeleopCore, TeleopStatus
+from motion_common.kinematics import RobotKinematics, pose_to_se3
+
+from ..conftest import HOME, ROOT, UR5E
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -78,8 +87,7 @@ def test_engage_ramp_and_watchdog():
 
 def test_gesture_and_button_clutches():
     gesture = GestureClutch(steady_frames=2)
-    assert [gesture.on_frame(t, n) for t, n in [(0, 1), (0.01, 2), (0.02, 2), (0.03, 1)]] == [False, False, True,
-                                                                                              False]
+    assert [gesture.on_frame(t, n) for t, n in [(0, 1), (0.01, 2), (0.02, 2), (0.03, 1)]] == [False, False, True, False]
     button = ButtonClutch()
     assert not button.on_frame(0.0)
     button.set_pressed(True)
@@ -155,13 +163,27 @@ def test_no_joint_step_above_the_limits_at_engage():
 def test_teleop_config_is_checked_with_the_file_named():
     from motion_commander.config import load_teleop_config
     from motion_common.errors import ParameterError
-    config = load_teleop_config({"speed_ratio": 0.5, "engage": "gesture", "joint_acceleration": 30.0,
-                                 "workspace_lower": [-1, -1, 0], "input": "pose"}, "my.yaml")
+
+    config = load_teleop_config(
+        {
+            "speed_ratio": 0.5,
+            "engage": "gesture",
+            "joint_acceleration": 30.0,
+            "workspace_lower": [-1, -1, 0],
+            "input": "pose",
+        },
+        "my.yaml",
+    )
     assert config.speed_ratio == 0.5 and config.safety.joint_acceleration == 30.0
-    for bad, fragment in [({"speed_ratio": -1}, "speed_ratio"), ({"engage": "psychic"}, "engage"),
-                          ({"joint_speed_scale": 1.5}, "joint_speed_scale"), ({"stale_timout_s": 0.1}, "unknown"),
-                          ({"workspace_lower": [0, 0]}, "workspace_lower"), ({"input": "udp"}, "input"),
-                          ({"singularity_slowdown": 90.0}, "singularity")]:
+    for bad, fragment in [
+        ({"speed_ratio": -1}, "speed_ratio"),
+        ({"engage": "psychic"}, "engage"),
+        ({"joint_speed_scale": 1.5}, "joint_speed_scale"),
+        ({"stale_timout_s": 0.1}, "unknown"),
+        ({"workspace_lower": [0, 0]}, "workspace_lower"),
+        ({"input": "udp"}, "input"),
+        ({"singularity_slowdown": 90.0}, "singularity"),
+    ]:
         with pytest.raises(ParameterError, match=fragment) as err:
             load_teleop_config(bad, "my.yaml")
         assert "my.yaml" in str(err.value)
@@ -170,6 +192,7 @@ def test_teleop_config_is_checked_with_the_file_named():
 def test_teleop_config_unknown_key_lists_the_valid_keys():
     from motion_commander.config import load_teleop_config
     from motion_common.errors import ParameterError
+
     with pytest.raises(ParameterError) as err:
         load_teleop_config({"stale_timout_s": 0.1}, "teleop.yaml")
     text = str(err.value)
@@ -178,8 +201,11 @@ def test_teleop_config_unknown_key_lists_the_valid_keys():
 
 def test_shipped_teleop_yaml_validates():
     import os
+
     import yaml
+
     from motion_commander.config import load_teleop_config
+
     path = os.path.join(ROOT, "src", "motion_commander", "config", "teleop.yaml")
     with open(path, encoding="utf-8") as stream:
         config = load_teleop_config(yaml.safe_load(stream), path)
@@ -192,7 +218,7 @@ def test_limiter_brakes_in_time_to_stop_at_a_reversing_target():
     limiter = JointStepLimiter([3.0], scale=1.0, acceleration_limit=80.0)
     dt, command, commands = 0.009, 0.0, []
     for k in range(80):
-        target = 0.4 * np.sin(2 * np.pi * 1.5 * k * dt)     # peaks at 0.4 rad, moving up to 3.8 rad/s
+        target = 0.4 * np.sin(2 * np.pi * 1.5 * k * dt)  # peaks at 0.4 rad, moving up to 3.8 rad/s
         limiter.observe_target([target], dt)
         command = float(limiter.limit([command], [target], dt)[0][0])
         commands.append(command)
@@ -204,7 +230,7 @@ def test_limiter_keeps_pace_with_a_target_moving_at_constant_speed():
     limiter = JointStepLimiter([3.0], scale=1.0, acceleration_limit=80.0)
     dt, command = 0.009, 0.0
     for k in range(1, 60):
-        target = 1.0 * k * dt                              # 1 rad/s
+        target = 1.0 * k * dt  # 1 rad/s
         limiter.observe_target([target], dt)
         command = float(limiter.limit([command], [target], dt)[0][0])
     assert target - command < 0.01, f"lags {target - command:.4f} rad behind a 1 rad/s target"
@@ -215,9 +241,11 @@ def test_carried_and_prepared_command_figures_give_the_same_commands_as_recomput
     # frame instead of recomputing it; the commands must be exactly those of recomputing.
     import os
 
-    from ..conftest import DATA
     from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording
     from motion_sensor.sequencing.sequencer import Sequencer
+
+    from ..conftest import DATA
+
     frames = read_recording(os.path.join(DATA, "test-paddle-rightwards.jsonl.gz")).frames
     runs = []
     for recompute, prepare in ((False, False), (True, False), (False, True)):
@@ -254,6 +282,7 @@ def test_condition_bound_never_claims_below_when_it_is_not():
     # Weyl's bound from a nearby reference: whenever it says "below", the exact condition
     # number is below; along a path into the wrist singularity it must stop saying so.
     from motion_commander.safety import condition_certainly_below, extreme_singular_values
+
     core = make_core()
     kin, rng = core.kinematics, np.random.default_rng(5)
     decided = undecided = 0
@@ -286,14 +315,17 @@ def test_the_bound_gives_the_guards_own_decisions_where_it_acts():
     # down exactly where the core without it does: same statuses, same commands.
     import os
 
-    from ..conftest import DATA
     from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording
     from motion_sensor.sequencing.sequencer import Sequencer
+
+    from ..conftest import DATA
+
     frames = read_recording(os.path.join(DATA, "test-paddle-rightwards.jsonl.gz")).frames
     runs = []
     for prepare in (False, True):
-        core = make_core(joint_speed_scale=1.0, joint_acceleration=200.0, singularity_slowdown=8.5,
-                         singularity_halt=12.0)
+        core = make_core(
+            joint_speed_scale=1.0, joint_acceleration=200.0, singularity_slowdown=8.5, singularity_halt=12.0
+        )
         sequencer, commands, statuses = Sequencer(), [], []
         for frame in frames:
             sample = frame_to_sample(frame, frame.timestamp)
@@ -328,8 +360,9 @@ def test_ik_seeded_with_the_last_goal_stays_on_the_commanded_branch():
             continue
         limited += command.status == TeleopStatus.JOINT_SPEED_LIMITED
         goal = core._last_goal
-        reference = core.kinematics.solve_ik(pose_to_se3(command.target_position, command.target_orientation),
-                                             core._command)
+        reference = core.kinematics.solve_ik(
+            pose_to_se3(command.target_position, command.target_orientation), core._command
+        )
         assert reference.success
         np.testing.assert_allclose(goal, core.margin.apply(reference.joints)[0], atol=1e-3)
         core.on_joint_state(command.joints)

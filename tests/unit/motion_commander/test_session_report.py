@@ -1,12 +1,20 @@
 """Session figures and plot, and the replay schedule."""
+
 import json
 import os
 
 import numpy as np
 import pytest
 
-from motion_commander.session_report import (SessionData, final_error, format_summary, plot_session, summarize,
-                                             tracking_errors, write_summary_json)
+from motion_commander.session_report import (
+    SessionData,
+    final_error,
+    format_summary,
+    plot_session,
+    summarize,
+    tracking_errors,
+    write_summary_json,
+)
 from motion_sensor.devices.replay import replay_schedule
 
 
@@ -30,8 +38,14 @@ def test_samples_outside_the_commanded_span_do_not_count():
 
 def test_summary_figures(tmp_path):
     t = np.linspace(0, 2, 201)
-    data = SessionData(frames_in=210, frames_out=205, frames_dropped=5, targets=[tuple(r) for r in line(t)],
-                       tools=[tuple(r) for r in line(t, offset=0.003)], latencies=list(np.linspace(0.001, 0.003, 201)))
+    data = SessionData(
+        frames_in=210,
+        frames_out=205,
+        frames_dropped=5,
+        targets=[tuple(r) for r in line(t)],
+        tools=[tuple(r) for r in line(t, offset=0.003)],
+        latencies=list(np.linspace(0.001, 0.003, 201)),
+    )
     summary = summarize(data)
     assert summary["tracking_error_rms_mm"] == pytest.approx(3.0)
     assert summary["final_error_mm"] == pytest.approx(3.0)
@@ -54,8 +68,12 @@ def test_empty_session_reports_without_crashing(tmp_path):
 
 def test_replay_schedule_rate_offset_and_fast_mode():
     times = [10.0, 10.1, 10.3, 10.6]
-    assert list(replay_schedule(times)) == [(0, 0.0), (1, pytest.approx(0.1)), (2, pytest.approx(0.3)),
-                                            (3, pytest.approx(0.6))]
+    assert list(replay_schedule(times)) == [
+        (0, 0.0),
+        (1, pytest.approx(0.1)),
+        (2, pytest.approx(0.3)),
+        (3, pytest.approx(0.6)),
+    ]
     assert [due for _, due in replay_schedule(times, rate=2.0)] == pytest.approx([0, 0.05, 0.15, 0.3])
     assert [i for i, _ in replay_schedule(times, start_offset=0.2)] == [2, 3]
     assert {due for _, due in replay_schedule(times, rate=0)} == {0.0}
@@ -63,14 +81,17 @@ def test_replay_schedule_rate_offset_and_fast_mode():
 
 
 def test_csv_replay_reads_rows_and_reports_bad_ones(tmp_path):
-    from motion_sensor.errors import MotionSensorError
     from motion_sensor.devices.replay import read_csv
+    from motion_sensor.errors import MotionSensorError
+
     path = tmp_path / "hand.csv"
-    path.write_text("stamp,x,y,z,qx,qy,qz,qw,hand_type\n"
-                    "1.00,0.1,0.0,0.2,0,0,0,1,right\n"
-                    "1.01,oops,0.0,0.2,0,0,0,1,right\n"
-                    "1.02,0.1,0.0,0.2,0,0,0,1,middle\n"
-                    "1.03,0.0,0.0,0.0,0,0,0,1,\n")
+    path.write_text(
+        "stamp,x,y,z,qx,qy,qz,qw,hand_type\n"
+        "1.00,0.1,0.0,0.2,0,0,0,1,right\n"
+        "1.01,oops,0.0,0.2,0,0,0,1,right\n"
+        "1.02,0.1,0.0,0.2,0,0,0,1,middle\n"
+        "1.03,0.0,0.0,0.0,0,0,0,1,\n"
+    )
     samples, rejected = read_csv(str(path))
     assert [s.hands_num for s in samples] == [1, 0] and samples[0].device == "csv"
     assert len(rejected) == 2 and rejected[0].startswith("line 3")

@@ -1,14 +1,16 @@
 """Teleop mapping, auto clutch, joint-step limiting and the TeleopCore pipeline."""
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ..conftest import HOME, UR5E
 from motion_commander.errors import MotionCommanderError
-from motion_common.kinematics import RobotKinematics
 from motion_commander.safety import JointStepLimiter
 from motion_commander.teleop import AutoClutch, TeleopMapper
 from motion_commander.teleop_core import Action, SafetyConfig, TeleopCore, TeleopStatus
+from motion_common.kinematics import RobotKinematics
+
+from ..conftest import HOME, UR5E
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 

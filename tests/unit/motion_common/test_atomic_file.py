@@ -1,4 +1,5 @@
 """motion_common.atomic_file: a saved file is a normal, readable file, written whole."""
+
 import os
 import stat
 

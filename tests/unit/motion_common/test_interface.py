@@ -1,12 +1,16 @@
 """motion_common.interface: declarations, name resolution and the comparison with a running
 graph (the master's getSystemState answer), without a roscore."""
+
 import pytest
 
 from motion_common.interface import NodeInterface, Service, Topic, graph_mismatches, resolve
 from motion_common.params import Param, ParamSchema
 
 NODE = NodeInterface(
-    "pkg", "talker", "a test node", ParamSchema([Param("rate", 1.0, "Hz", low=0)]),
+    "pkg",
+    "talker",
+    "a test node",
+    ParamSchema([Param("rate", 1.0, "Hz", low=0)]),
     publishes=(Topic("chatter", "std_msgs/String"), Topic("~debug", "std_msgs/String", optional=True)),
     subscribes=(Topic("~input", "std_msgs/String"),),
     serves=(Service("reset", "std_srvs/Trigger"),),
@@ -14,8 +18,11 @@ NODE = NodeInterface(
 
 
 def state(pubs=(), subs=(), srvs=()):
-    return ([[name, ["/left/talker"]] for name in pubs], [[name, ["/left/talker"]] for name in subs],
-            [[name, ["/left/talker"]] for name in srvs])
+    return (
+        [[name, ["/left/talker"]] for name in pubs],
+        [[name, ["/left/talker"]] for name in subs],
+        [[name, ["/left/talker"]] for name in srvs],
+    )
 
 
 def test_resolve_follows_rospy():

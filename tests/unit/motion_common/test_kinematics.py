@@ -1,11 +1,12 @@
 """pinocchio kinematics of the shipped UR models: FK against the DH numbers, IK round trips."""
+
 import numpy as np
 import pytest
 
-from ..conftest import HOME, UR10E, UR5E
 from motion_common.errors import RobotModelError
-from motion_common.kinematics import (RobotKinematics, pose_to_se3, se3_to_pose, singular_values,
-                                      solve_positive_definite)
+from motion_common.kinematics import RobotKinematics, pose_to_se3, se3_to_pose, singular_values, solve_positive_definite
+
+from ..conftest import HOME, UR5E, UR10E
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +63,7 @@ def test_a_prepared_seed_gives_the_solve_of_the_seed_itself(ur5e, rng):
     for k in range(40):
         seed = HOME + rng.uniform(-0.3, 0.3, 6)
         if k == 0:
-            seed[1] = ur5e.upper[1] + 0.5   # outside the limits: the prepared seed is clipped too
+            seed[1] = ur5e.upper[1] + 0.5  # outside the limits: the prepared seed is clipped too
         target = ur5e.forward(seed + rng.uniform(-0.08, 0.08, 6))
         plain = ur5e.solve_ik(target, seed)
         prepared = ur5e.solve_ik(target, seed, prepared=ur5e.prepare_seed(seed))
@@ -92,10 +93,11 @@ def test_quaternion_to_matrix_normalises_and_matches_scipy(rng):
     from scipy.spatial.transform import Rotation
 
     from motion_common.kinematics import matrix_to_quat, quat_to_matrix
+
     for _ in range(20):
         quat = rng.normal(size=4)
         expected = Rotation.from_quat(quat / np.linalg.norm(quat)).as_matrix()
-        np.testing.assert_allclose(quat_to_matrix(quat), expected, atol=1e-12)        # array, not unit
+        np.testing.assert_allclose(quat_to_matrix(quat), expected, atol=1e-12)  # array, not unit
         np.testing.assert_allclose(quat_to_matrix(quat.tolist()), expected, atol=1e-12)  # list of floats
         back = matrix_to_quat(expected)
         np.testing.assert_allclose(abs(back @ quat) / np.linalg.norm(quat), 1.0, atol=1e-12)
@@ -121,10 +123,13 @@ def test_tx90_zero_pose_is_upright_with_its_offsets():
     assert kin.joint_names == [f"joint_{i}" for i in range(1, 7)]
 
 
-@pytest.mark.parametrize("urdf, home", [
-    (UR10E, HOME),
-    (TX90, np.array([0.0, 0.4, 1.6, 0.0, 1.14, 0.0])),
-])
+@pytest.mark.parametrize(
+    "urdf, home",
+    [
+        (UR10E, HOME),
+        (TX90, np.array([0.0, 0.4, 1.6, 0.0, 1.14, 0.0])),
+    ],
+)
 def test_ik_round_trip_on_every_shipped_robot(urdf, home, rng):
     kin = RobotKinematics(urdf)
     for _ in range(30):

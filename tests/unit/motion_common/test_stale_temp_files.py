@@ -1,5 +1,6 @@
 """Saves clean up after killed saves: the temporary files a killed writer left are removed
 by the next save of the same file (or at start), never a live one."""
+
 import os
 import signal
 import subprocess
@@ -36,7 +37,7 @@ def test_kill_9_during_saves_leaves_nothing_after_the_next_save(tmp_path):
     target = tmp_path / "prog.yaml"
     script = textwrap.dedent(f"""
         import sys
-        sys.path.insert(0, {os.path.dirname(os.path.dirname(os.path.abspath(__import__('motion_common').__file__)))!r})
+        sys.path.insert(0, {os.path.dirname(os.path.dirname(os.path.abspath(__import__("motion_common").__file__)))!r})
         from motion_common.atomic_file import write_atomic
         while True:
             write_atomic({str(target)!r}, "x: " + "1" * 200000 + "\\n")

@@ -1,4 +1,5 @@
 """freeze_startup_heap: the start-up heap leaves the collector's scans."""
+
 import gc
 
 from motion_common.startup_heap import freeze_startup_heap

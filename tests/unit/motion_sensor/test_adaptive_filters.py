@@ -3,6 +3,7 @@
 A synthetic hand: a still phase with physiological tremor (9 Hz, 0.4 mm) and sensor
 noise (0.3 mm), then a deliberate move at 0.3 m/s, sampled at 110 Hz with jittered gaps.
 """
+
 import numpy as np
 import pytest
 
@@ -81,8 +82,8 @@ def test_imm_kalman_takes_the_manoeuvre_model_at_the_start_of_a_move_only(rng):
     probabilities, outputs = np.array(probabilities), np.array(outputs)
     onset = int(np.argmax(moving))
     assert np.mean(probabilities[100:onset]) < 0.1
-    assert np.max(probabilities[onset:onset + int(0.15 * RATE)]) > 0.8
-    assert np.mean(probabilities[-int(0.5 * RATE):]) < 0.1
+    assert np.max(probabilities[onset : onset + int(0.15 * RATE)]) > 0.8
+    assert np.mean(probabilities[-int(0.5 * RATE) :]) < 0.1
     assert moving_lag(outputs, truth, moving, stamps) < 0.002
     assert still_jitter(outputs, stamps) < 0.3 * still_jitter(positions, stamps)
 
@@ -96,13 +97,16 @@ def test_imm_is_steadier_than_a_single_cv_model_that_follows_as_well(rng):
     assert KalmanFilter(maneuver_process_noise=0.0).maneuver_probability == 0.0
 
 
-@pytest.mark.parametrize("name,params", [
-    ("one_euro", {"speed_threshold": -0.1}),
-    ("one_euro", {"beta": float("nan")}),
-    ("kalman", {"switch_probability": 0.0}),
-    ("kalman", {"switch_probability": 0.7}),
-    ("kalman", {"maneuver_process_noise": -1.0}),
-])
+@pytest.mark.parametrize(
+    "name,params",
+    [
+        ("one_euro", {"speed_threshold": -0.1}),
+        ("one_euro", {"beta": float("nan")}),
+        ("kalman", {"switch_probability": 0.0}),
+        ("kalman", {"switch_probability": 0.7}),
+        ("kalman", {"maneuver_process_noise": -1.0}),
+    ],
+)
 def test_bad_adaptive_parameters_are_rejected_by_name(name, params):
     with pytest.raises(MotionSensorError, match=list(params)[0]):
         make_filter(name, **params)
@@ -126,8 +130,11 @@ def test_shipped_sequencer_yaml_states_the_filters_defaults():
     and say what the code does when the parameters are left out."""
     import inspect
     import os
+
     import yaml
+
     from motion_sensor.sequencing.filters import FILTERS
+
     path = os.path.join(ROOT, "src", "motion_sensor", "config", "sequencer.yaml")
     with open(path, encoding="utf-8") as fh:
         params = yaml.safe_load(fh)["filter_params"]
@@ -142,13 +149,16 @@ def test_shipped_sequencer_yaml_states_the_filters_defaults():
 def test_fast_likelihood_matches_scipy(rng):
     """The IMM's likelihood shortcut gives scipy's multivariate normal log-density."""
     from scipy.stats import multivariate_normal
+
     from motion_sensor.sequencing.filters import _gaussian_log_density
+
     for _ in range(20):
         a = rng.normal(size=(3, 3))
         covariance = a @ a.T + 0.01 * np.eye(3)
         residual = rng.normal(size=3)
         assert _gaussian_log_density(residual, covariance) == pytest.approx(
-            multivariate_normal.logpdf(residual, cov=covariance), rel=1e-9, abs=1e-9)
+            multivariate_normal.logpdf(residual, cov=covariance), rel=1e-9, abs=1e-9
+        )
 
 
 def test_kalman_loads_filterpy_when_built_not_on_the_first_frame():
@@ -157,10 +167,13 @@ def test_kalman_loads_filterpy_when_built_not_on_the_first_frame():
     import os
     import subprocess
     import sys
+
     package_root = os.path.join(ROOT, "src", "motion_sensor")
-    code = ("import sys; from motion_sensor.sequencing.filters import make_filter; "
-            "assert 'filterpy.kalman' not in sys.modules; make_filter('kalman'); "
-            "assert 'filterpy.kalman' in sys.modules")
+    code = (
+        "import sys; from motion_sensor.sequencing.filters import make_filter; "
+        "assert 'filterpy.kalman' not in sys.modules; make_filter('kalman'); "
+        "assert 'filterpy.kalman' in sys.modules"
+    )
     common_root = os.path.join(ROOT, "src", "motion_common")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([package_root, common_root, os.environ.get("PYTHONPATH", "")]))
     subprocess.run([sys.executable, "-c", code], check=True, env=env)

@@ -1,20 +1,26 @@
 """Depth-camera hand tracking on rendered depth images of a hand with its forearm
 (motion_sensor.testing.synthetic_depth): palm position along a known 3-D path, orientation, grab,
 working volume, second hand, and the topic device's handling of bad images."""
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 from motion_sensor.devices.depth_device import DepthMessage, DepthTopicDevice
 from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY, TRACKER_PARAMS, DepthHandTracker
-from motion_sensor.devices.depth_image import DepthImageError, decode_depth, encode_depth_mm, intrinsics_from_camera_info
+from motion_sensor.devices.depth_image import (
+    DepthImageError,
+    decode_depth,
+    encode_depth_mm,
+    intrinsics_from_camera_info,
+)
 from motion_sensor.devices.device import DeviceRunner
 from motion_sensor.errors import MotionSensorError
 from motion_sensor.testing.synthetic_depth import DEFAULT_INTRINSICS as INTR
 from motion_sensor.testing.synthetic_depth import HAND_UPRIGHT, HandPose, hand_path, render_hand
 
 K = [INTR.fx, 0, INTR.cx, 0, INTR.fy, INTR.cy, 0, 0, 1]
-NOISE = 0.0015   # sigma = 1.5 mm * z^2: a Kinect-like depth noise
+NOISE = 0.0015  # sigma = 1.5 mm * z^2: a Kinect-like depth noise
 
 
 def axis_angle_deg(a, b):
@@ -66,16 +72,18 @@ def test_upright_hand_axes_in_the_camera_frame():
     depth = render_hand(HandPose(np.array([0.0, 0.0, 0.8]), HAND_UPRIGHT))
     hand = DepthHandTracker({}).track(depth, INTR)
     axes = Rotation.from_quat(hand.orientation).as_matrix()
-    assert axes[2, 0] > 0.98        # fingers up (REP 103 +z)
-    assert axes[0, 2] > 0.98        # back of the hand away from the camera (+x)
+    assert axes[2, 0] > 0.98  # fingers up (REP 103 +z)
+    assert axes[0, 2] > 0.98  # back of the hand away from the camera (+x)
     assert hand.hands_num == 1 and hand.hand_types == ("right",)
     assert np.allclose(hand.position[1:], 0.0, atol=0.003) and 0.775 < hand.position[0] < 0.79
 
 
 def test_grab_strength_open_and_fist():
     tracker = DepthHandTracker({})
-    grabs = [tracker.track(render_hand(HandPose(np.array([0.05, -0.02, 0.7]), HAND_UPRIGHT, g)), INTR).grab_strength
-             for g in (0.0, 0.5, 1.0)]
+    grabs = [
+        tracker.track(render_hand(HandPose(np.array([0.05, -0.02, 0.7]), HAND_UPRIGHT, g)), INTR).grab_strength
+        for g in (0.0, 0.5, 1.0)
+    ]
     assert grabs[0] < 0.2 and grabs[2] > 0.8 and grabs[0] < grabs[1] < grabs[2], grabs
 
 
@@ -98,7 +106,7 @@ def test_nearest_blob_wins_and_a_second_hand_is_reported():
     depth = render_hand(right, extra=[left], torso=False)
     hand = DepthHandTracker({"hand_type": "by_position"}).track(depth, INTR)
     assert hand.hands_num == 2 and hand.hand_types == ("right", "left")
-    assert abs(hand.position[1] - 0.15) < 0.01          # the nearer hand (camera's left, +y)
+    assert abs(hand.position[1] - 0.15) < 0.01  # the nearer hand (camera's left, +y)
     one = DepthHandTracker({"max_hands": 1}).track(depth, INTR)
     assert one.hands_num == 1
 
@@ -108,14 +116,16 @@ def test_body_or_wall_alone_is_no_hand():
     tracker = DepthHandTracker({})
     assert tracker.track(wall, INTR) is None and "larger than a hand" in tracker.last_reason
     specks = np.zeros_like(wall)
-    specks[100:108, 100:108] = 0.8     # 8x8 px at 0.8 m: 1.3 cm^2, far below a hand
+    specks[100:108, 100:108] = 0.8  # 8x8 px at 0.8 m: 1.3 cm^2, far below a hand
     assert tracker.track(specks, INTR) is None and "smaller" in tracker.last_reason
 
 
 def test_hand_id_changes_after_loss_or_jump():
     tracker = DepthHandTracker({})
-    at = [tracker.track(render_hand(HandPose(np.array(p), HAND_UPRIGHT), torso=False), INTR)
-          for p in ([0, 0, 0.7], [0.01, 0, 0.7], [0.3, 0, 0.7])]
+    at = [
+        tracker.track(render_hand(HandPose(np.array(p), HAND_UPRIGHT), torso=False), INTR)
+        for p in ([0, 0, 0.7], [0.01, 0, 0.7], [0.3, 0, 0.7])
+    ]
     assert at[0].hand_id == at[1].hand_id != at[2].hand_id
     assert tracker.track(np.zeros((INTR.height, INTR.width), np.float32), INTR) is None
     assert tracker.track(render_hand(HandPose(np.array([0.3, 0, 0.7]), HAND_UPRIGHT)), INTR).hand_id != at[2].hand_id
@@ -128,28 +138,38 @@ def test_bad_tracker_config_is_refused():
 
 # --- image decoding -------------------------------------------------------------------
 
+
 def test_decode_16uc1_and_32fc1_agree():
     depth = render_hand(HandPose(np.array([0.0, 0.0, 0.8]), HAND_UPRIGHT))
     mm = decode_depth("16UC1", INTR.width, INTR.height, INTR.width * 2, encode_depth_mm(depth))
     metres = decode_depth("32FC1", INTR.width, INTR.height, INTR.width * 4, depth.astype("<f4").tobytes())
     assert np.allclose(mm, metres, atol=0.0006)
-    big = decode_depth("16UC1", INTR.width, INTR.height, INTR.width * 2,
-                       np.rint(depth * 1000).astype(">u2").tobytes(), is_bigendian=True)
+    big = decode_depth(
+        "16UC1",
+        INTR.width,
+        INTR.height,
+        INTR.width * 2,
+        np.rint(depth * 1000).astype(">u2").tobytes(),
+        is_bigendian=True,
+    )
     assert np.allclose(big, mm)
     padded = np.zeros((INTR.height, INTR.width + 8), "<u2")
-    padded[:, :INTR.width] = np.rint(depth * 1000)
+    padded[:, : INTR.width] = np.rint(depth * 1000)
     assert np.allclose(decode_depth("16UC1", INTR.width, INTR.height, (INTR.width + 8) * 2, padded.tobytes()), mm)
 
 
-@pytest.mark.parametrize("encoding,step,data,reason", [
-    ("rgb8", 640 * 3, bytes(640 * 480 * 3), "encoding"),
-    ("16UC1", 640 * 2, bytes(640 * 480 * 2 - 2), "size"),
-    ("16UC1", 600, bytes(600 * 480), "size"),
-    ("16UC1", 640 * 2, bytes(640 * 480 * 2), "empty_depth"),
-    ("32FC1", 640 * 4, np.full(640 * 480, np.nan, "<f4").tobytes(), "empty_depth"),
-    ("16UC1", 640 * 2, np.full(640 * 480, 65535, "<u2").tobytes(), "saturated_depth"),
-    ("32FC1", 640 * 4, np.full(640 * 480, np.inf, "<f4").tobytes(), "saturated_depth"),
-])
+@pytest.mark.parametrize(
+    "encoding,step,data,reason",
+    [
+        ("rgb8", 640 * 3, bytes(640 * 480 * 3), "encoding"),
+        ("16UC1", 640 * 2, bytes(640 * 480 * 2 - 2), "size"),
+        ("16UC1", 600, bytes(600 * 480), "size"),
+        ("16UC1", 640 * 2, bytes(640 * 480 * 2), "empty_depth"),
+        ("32FC1", 640 * 4, np.full(640 * 480, np.nan, "<f4").tobytes(), "empty_depth"),
+        ("16UC1", 640 * 2, np.full(640 * 480, 65535, "<u2").tobytes(), "saturated_depth"),
+        ("32FC1", 640 * 4, np.full(640 * 480, np.inf, "<f4").tobytes(), "saturated_depth"),
+    ],
+)
 def test_malformed_images_are_rejected_with_a_reason(encoding, step, data, reason):
     with pytest.raises(DepthImageError) as info:
         decode_depth(encoding, 640, 480, step, data)
@@ -165,9 +185,16 @@ def test_invalid_camera_info_is_rejected(k):
 
 # --- the topic device -----------------------------------------------------------------
 
+
 def message(depth, stamp):
-    return DepthMessage(stamp=stamp, encoding="16UC1", width=depth.shape[1], height=depth.shape[0],
-                        step=depth.shape[1] * 2, data=encode_depth_mm(depth))
+    return DepthMessage(
+        stamp=stamp,
+        encoding="16UC1",
+        width=depth.shape[1],
+        height=depth.shape[0],
+        step=depth.shape[1] * 2,
+        data=encode_depth_mm(depth),
+    )
 
 
 def make_device():
@@ -179,15 +206,15 @@ def test_topic_device_stamps_counts_and_never_publishes_bad_images():
     published = []
     runner = DeviceRunner(device, published.append, stopped=lambda: False)
     hand = render_hand(HandPose(np.array([0.0, 0.0, 0.8]), HAND_UPRIGHT))
-    runner.step(device.process(message(hand, 10.0)))                  # no CameraInfo yet
+    runner.step(device.process(message(hand, 10.0)))  # no CameraInfo yet
     device.feed_info([0] * 9, 640, 480)
-    runner.step(device.process(message(hand, 10.1)))                  # invalid CameraInfo
+    runner.step(device.process(message(hand, 10.1)))  # invalid CameraInfo
     device.feed_info(K, 640, 480)
-    runner.step(device.process(message(hand, 10.2)))                  # a hand
-    runner.step(device.process(message(np.zeros_like(hand), 10.3)))   # black frame
+    runner.step(device.process(message(hand, 10.2)))  # a hand
+    runner.step(device.process(message(np.zeros_like(hand), 10.3)))  # black frame
     runner.step(device.process(message(hand[:240, :320].copy(), 10.4)))  # size differs from CameraInfo
     empty_scene = np.full_like(hand, 2.5)
-    runner.step(device.process(message(empty_scene, 10.5)))          # nothing in the volume: hands_num 0
+    runner.step(device.process(message(empty_scene, 10.5)))  # nothing in the volume: hands_num 0
     bad = message(hand, 10.6)
     bad.encoding = "bgr8"
     runner.step(device.process(bad))
@@ -208,4 +235,4 @@ def test_topic_device_keeps_the_newest_images():
         device.feed_image(message(hand, stamp))
     assert device.read(0.0).stamp == 3.0 and device.read(0.0).stamp == 4.0
     assert device.counters["skipped"] == 2
-    assert device.read(0.0) is None   # nothing queued: returns after wait_s
+    assert device.read(0.0) is None  # nothing queued: returns after wait_s

@@ -1,16 +1,18 @@
 """The depth devices' parameters: the shipped YAMLs validate (with the node wrapper's
 parameters), a misspelt key is refused naming it, and every parameter the launch files set
 on depth_hand_driver / kinect_driver is declared."""
+
 import os
 from xml.etree import ElementTree
 
 import pytest
 import yaml
 
-from ..conftest import ROOT
 from motion_common.errors import ParameterError
 from motion_sensor.devices.depth_device import DepthTopicDevice
 from motion_sensor.devices.kinect import KinectDevice
+
+from ..conftest import ROOT
 from .test_sensor_params import node_schema
 
 CONFIG = os.path.join(ROOT, "src", "motion_sensor", "config")
@@ -24,7 +26,7 @@ def load(name):
 def test_shipped_yamls_validate():
     depth = node_schema(DepthTopicDevice).validate(load("depth_hand.yaml"), "depth_hand.yaml")
     assert "image_topic" not in depth and depth["min_depth_m"] <= 0.4
-    assert depth["max_depth_m"] >= 1.2          # the working volume reaches 0.4-1.2 m at least
+    assert depth["max_depth_m"] >= 1.2  # the working volume reaches 0.4-1.2 m at least
     kinect = node_schema(KinectDevice).validate({**load("depth_hand.yaml"), **load("kinect.yaml")}, "kinect.yaml")
     assert kinect["depth_format"] == "mm" and len(kinect["intrinsics_px"]) == 4
 

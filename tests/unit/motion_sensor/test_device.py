@@ -1,10 +1,18 @@
 """The hand-device base class and its ROS-free runner, on a fake clock (no real sleeping)."""
+
 import numpy as np
 import pytest
 
 from motion_common.params import Param, ParamSchema
-from motion_sensor.devices.device import (Backoff, DeviceRunner, HandDevice, empty_sample, reconnect_loop, sample_problem,
-                                  wait_until_ready)
+from motion_sensor.devices.device import (
+    Backoff,
+    DeviceRunner,
+    HandDevice,
+    empty_sample,
+    reconnect_loop,
+    sample_problem,
+    wait_until_ready,
+)
 from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
 from motion_sensor.hand_sample import HandSample
 
@@ -57,16 +65,27 @@ class FakeDevice(HandDevice):
 
 def run(device, clock, **kw):
     published, bools = [], []
-    runner = DeviceRunner(device, published.append, lambda: False, clock=clock, sleep=clock.sleep,
-                          publish_bool=lambda k, v: bools.append((k, v)), **kw)
+    runner = DeviceRunner(
+        device,
+        published.append,
+        lambda: False,
+        clock=clock,
+        sleep=clock.sleep,
+        publish_bool=lambda k, v: bools.append((k, v)),
+        **kw,
+    )
     return runner, runner.run(), published, bools
 
 
 def test_reconnects_with_exponential_backoff_on_the_injected_clock():
     clock = FakeClock()
     refused = DeviceUnavailable("refused")
-    device = FakeDevice(opens=[refused, OSError("unplugged"), refused, None, None],
-                        script=[good, DeviceUnavailable("dropped"), good, good], clock=clock, sleep=clock.sleep)
+    device = FakeDevice(
+        opens=[refused, OSError("unplugged"), refused, None, None],
+        script=[good, DeviceUnavailable("dropped"), good, good],
+        clock=clock,
+        sleep=clock.sleep,
+    )
     runner, finished, published, _ = run(device, clock, backoff=Backoff(0.5, 2.0, 1.5))
     assert finished and len(published) == 3
     # three refusals: 0.5, 1, 1.5 (capped); the drop after a good connection starts again at 0.5
@@ -84,8 +103,9 @@ def test_bad_samples_are_dropped_and_counted_empty_frames_pass():
     scaled.orientation = np.array([0, 0, 0, 2.0])
     mismatch = good(1.0)
     mismatch.hands_num = 2
-    device = FakeDevice(script=[good, nan, scaled, mismatch, None, empty_sample(5.0, "f")],
-                        clock=clock, sleep=clock.sleep)
+    device = FakeDevice(
+        script=[good, nan, scaled, mismatch, None, empty_sample(5.0, "f")], clock=clock, sleep=clock.sleep
+    )
     warnings = []
     device.warn = warnings.append
     _, _, published, _ = run(device, clock)
@@ -154,9 +174,15 @@ def test_wait_until_ready_logs_what_it_waits_for():
         if clock.now > 12.0:
             state["ready"] = True
 
-    ok = wait_until_ready([("True on /ready", lambda: state["ready"]),
-                           ("1 subscriber(s)", lambda: state["subscribers"] >= 1)],
-                          lambda: False, clock, sleep, logs.append, poll_s=0.1, log_every_s=5.0)
+    ok = wait_until_ready(
+        [("True on /ready", lambda: state["ready"]), ("1 subscriber(s)", lambda: state["subscribers"] >= 1)],
+        lambda: False,
+        clock,
+        sleep,
+        logs.append,
+        poll_s=0.1,
+        log_every_s=5.0,
+    )
     assert ok and 12.0 < clock.now < 12.2
     assert len(logs) == 3 and "/ready" in logs[0] and "subscriber" in logs[0] and "subscriber" not in logs[-1]
     assert wait_until_ready([("never", lambda: False)], lambda: True, clock, sleep, logs.append) is False

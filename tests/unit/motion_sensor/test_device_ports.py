@@ -1,5 +1,6 @@
 """The three devices ported onto HandDevice (replay, SpaceMouse, Leap), run by the
 DeviceRunner on a fake clock wherever timing matters (no real sleeping)."""
+
 import os
 import socket
 import struct
@@ -7,15 +8,16 @@ import struct
 import numpy as np
 import pytest
 
-from ..conftest import DATA, ROOT
 from motion_common.errors import ParameterError
 from motion_sensor.devices.device import Backoff, DeviceRunner
-from motion_sensor.errors import MotionSensorError
 from motion_sensor.devices.leap_client import LeapDevice
 from motion_sensor.devices.leap_server import Faults, LeapReplayServer
 from motion_sensor.devices.leap_v6 import read_recording
 from motion_sensor.devices.replay import ReplayDevice
 from motion_sensor.devices.spacemouse import SpaceMouseDevice
+from motion_sensor.errors import MotionSensorError
+
+from ..conftest import DATA, ROOT
 from .test_device import FakeClock
 
 WAVE = os.path.join(DATA, "wave.jsonl.gz")
@@ -28,8 +30,14 @@ def config(device_cls, **values):
 
 def run(device, clock, stopped=lambda published: False):
     published, bools = [], []
-    runner = DeviceRunner(device, published.append, lambda: stopped(published), clock=clock, sleep=clock.sleep,
-                          publish_bool=lambda key, value: bools.append((key, value)))
+    runner = DeviceRunner(
+        device,
+        published.append,
+        lambda: stopped(published),
+        clock=clock,
+        sleep=clock.sleep,
+        publish_bool=lambda key, value: bools.append((key, value)),
+    )
     return runner.run(), published, bools
 
 
@@ -48,8 +56,9 @@ def test_replay_rate_offset_and_loop():
     clock = FakeClock(0.0)
     frames = read_recording(WAVE).frames
     duration = frames[-1].timestamp - frames[0].timestamp
-    fast = ReplayDevice(config(ReplayDevice, recording=WAVE, rate=2.0, start_offset=0.5), clock=clock,
-                        sleep=clock.sleep)
+    fast = ReplayDevice(
+        config(ReplayDevice, recording=WAVE, rate=2.0, start_offset=0.5), clock=clock, sleep=clock.sleep
+    )
     _, published, _ = run(fast, clock)
     assert len(published) < len(frames)
     assert published[-1].stamp - published[0].stamp == pytest.approx((duration - 0.5) / 2, abs=0.02)
@@ -60,8 +69,9 @@ def test_replay_rate_offset_and_loop():
 
 def test_replay_csv_and_unusable_files(tmp_path):
     path = tmp_path / "hand.csv"
-    path.write_text("stamp,x,y,z,qx,qy,qz,qw,hand_type\n1.0,0,0,0.2,0,0,0,1,right\n1.1,0,0,0.21,0,0,0,1,\n"
-                    "1.2,x,0,0,0,0,0,1,right\n")
+    path.write_text(
+        "stamp,x,y,z,qx,qy,qz,qw,hand_type\n1.0,0,0,0.2,0,0,0,1,right\n1.1,0,0,0.21,0,0,0,1,\n1.2,x,0,0,0,0,0,1,right\n"
+    )
     clock = FakeClock()
     device = ReplayDevice(config(ReplayDevice, recording=str(path)), clock=clock, sleep=clock.sleep)
     _, published, _ = run(device, clock)
@@ -115,6 +125,7 @@ class FakeHid:
 
             def close(self):
                 hid.closed += 1
+
         return Device()
 
 
@@ -149,8 +160,9 @@ def test_leap_device_streams_a_service_and_counts_bad_messages():
     try:
         device = LeapDevice(config(LeapDevice, port=port))
         published = []
-        runner = DeviceRunner(device, published.append, lambda: len(published) >= len(server.frames) - 2,
-                              backoff=Backoff(0.01, 2.0, 0.05))
+        runner = DeviceRunner(
+            device, published.append, lambda: len(published) >= len(server.frames) - 2, backoff=Backoff(0.01, 2.0, 0.05)
+        )
         runner.run()
     finally:
         device.stop()
@@ -173,8 +185,9 @@ def test_replay_repeat_plays_passes_with_a_hand_absent_pause_then_finishes():
     clock = FakeClock(1000.0)
     frames = read_recording(WAVE).frames
     duration = frames[-1].timestamp - frames[0].timestamp
-    device = ReplayDevice(config(ReplayDevice, recording=WAVE, repeat=3, repeat_pause=0.5), clock=clock,
-                          sleep=clock.sleep)
+    device = ReplayDevice(
+        config(ReplayDevice, recording=WAVE, repeat=3, repeat_pause=0.5), clock=clock, sleep=clock.sleep
+    )
     finished, published, _ = run(device, clock)
     assert finished and len(published) == 3 * len(frames) and device.counters["passes"] == 2
     stamps = np.array([s.stamp for s in published])

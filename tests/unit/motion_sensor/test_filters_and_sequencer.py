@@ -1,20 +1,23 @@
 """Mean filter, quaternion averaging and the sequencer's drop rules."""
+
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.sequencing.filters import MeanFilter, average_quaternions, make_filter
 from motion_sensor.hand_sample import HandSample
+from motion_sensor.sequencing.filters import MeanFilter, average_quaternions, make_filter
 from motion_sensor.sequencing.sequencer import Sequencer, SequencerConfig
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
 def sample(stamp, position=(0.0, 0.0, 0.2), orientation=IDENTITY, **kw):
-    return HandSample(stamp=stamp, position=np.array(position, dtype=float),
-                      orientation=np.array(orientation, dtype=float), **kw)
+    return HandSample(
+        stamp=stamp, position=np.array(position, dtype=float), orientation=np.array(orientation, dtype=float), **kw
+    )
 
 
 def test_mean_filter_averages_the_last_ten():
@@ -66,16 +69,19 @@ def test_sequencer_passes_good_frames_and_counts():
     assert seq.counters["frames_out"] == 1 and seq.dropped == 0
 
 
-@pytest.mark.parametrize("bad, reason", [
-    (dict(position=(np.nan, 0, 0)), "non_finite"),
-    (dict(orientation=(0, 0, 0, 2.0)), "non_unit_quaternion"),
-    (dict(orientation=(0, 0, 0, 0)), "non_unit_quaternion"),
-    (dict(hands_num=2), "hands_num_mismatch"),
-    (dict(position=(0.0, 0.1)), "malformed"),
-    (dict(position=np.zeros((3, 1))), "malformed"),
-    (dict(orientation=(0, 0, np.inf, 1)), "non_finite"),
-    (dict(position=(0, 0, 0.2, 0.1)), "malformed"),
-])
+@pytest.mark.parametrize(
+    "bad, reason",
+    [
+        (dict(position=(np.nan, 0, 0)), "non_finite"),
+        (dict(orientation=(0, 0, 0, 2.0)), "non_unit_quaternion"),
+        (dict(orientation=(0, 0, 0, 0)), "non_unit_quaternion"),
+        (dict(hands_num=2), "hands_num_mismatch"),
+        (dict(position=(0.0, 0.1)), "malformed"),
+        (dict(position=np.zeros((3, 1))), "malformed"),
+        (dict(orientation=(0, 0, np.inf, 1)), "non_finite"),
+        (dict(position=(0, 0, 0.2, 0.1)), "malformed"),
+    ],
+)
 def test_sequencer_drops_bad_frames(bad, reason):
     seq = plain()
     assert seq.process(sample(10.0, **bad), now=10.0) is None
@@ -84,16 +90,21 @@ def test_sequencer_drops_bad_frames(bad, reason):
 
 def test_sequencer_drops_stale_duplicate_out_of_order_and_future():
     seq = plain(max_age_s=0.1)
-    assert seq.process(sample(10.0), now=10.2) is None            # older than max age
+    assert seq.process(sample(10.0), now=10.2) is None  # older than max age
     assert seq.process(sample(10.0), now=10.01) is not None
-    assert seq.process(sample(10.0), now=10.02) is None           # duplicate
-    assert seq.process(sample(9.99), now=10.02) is None           # out of order
-    assert seq.process(sample(11.0), now=10.02) is None           # from the future
-    assert seq.process(sample(-1.0), now=10.02) is None           # negative stamp
+    assert seq.process(sample(10.0), now=10.02) is None  # duplicate
+    assert seq.process(sample(9.99), now=10.02) is None  # out of order
+    assert seq.process(sample(11.0), now=10.02) is None  # from the future
+    assert seq.process(sample(-1.0), now=10.02) is None  # negative stamp
     assert seq.process(sample(10.05), now=10.06) is not None
     counts = seq.counters
-    assert (counts["dropped_stale"], counts["dropped_duplicate"], counts["dropped_out_of_order"],
-            counts["dropped_future_stamp"], counts["dropped_bad_stamp"]) == (1, 1, 1, 1, 1)
+    assert (
+        counts["dropped_stale"],
+        counts["dropped_duplicate"],
+        counts["dropped_out_of_order"],
+        counts["dropped_future_stamp"],
+        counts["dropped_bad_stamp"],
+    ) == (1, 1, 1, 1, 1)
     assert seq.dropped == 5
 
 
@@ -232,6 +243,7 @@ def test_every_filter_outputs_unit_quaternions_and_follows_a_ramp(name, rng):
 def test_one_euro_rate_comes_from_stamps():
     """The same motion sampled at 50 and 200 Hz gives nearly the same output at the same
     instants; a filter that assumed a fixed 110 Hz rate would not."""
+
     def run(rate, assumed_rate=None):
         f = make_filter("one_euro")
         out = {}
@@ -250,9 +262,14 @@ def test_one_euro_rate_comes_from_stamps():
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.lists(st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(0.0, 0.6),
-                          st.floats(0.001, 0.05)), min_size=1, max_size=60),
-       st.sampled_from(["mean", "one_euro", "kalman"]))
+@given(
+    st.lists(
+        st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(0.0, 0.6), st.floats(0.001, 0.05)),
+        min_size=1,
+        max_size=60,
+    ),
+    st.sampled_from(["mean", "one_euro", "kalman"]),
+)
 def test_sequencer_output_is_always_finite_and_unit(steps, name):
     seq = Sequencer(SequencerConfig(filter_name=name, entry_trim_frames=2))
     t = 10.0
@@ -265,11 +282,22 @@ def test_sequencer_output_is_always_finite_and_unit(steps, name):
 
 def test_bad_gesture_fields_are_dropped_and_counted():
     from motion_sensor.sequencing.sequencer import validate_sample
-    good = HandSample(stamp=1.0, position=np.zeros(3), orientation=np.array([0, 0, 0, 1.0]),
-                      grab_strength=0.5, pinch_strength=-1.0, index_tip=np.array([0.1, 0, 0]))
+
+    good = HandSample(
+        stamp=1.0,
+        position=np.zeros(3),
+        orientation=np.array([0, 0, 0, 1.0]),
+        grab_strength=0.5,
+        pinch_strength=-1.0,
+        index_tip=np.array([0.1, 0, 0]),
+    )
     assert validate_sample(good) is None
-    for field, value in [("grab_strength", 1.5), ("pinch_strength", float("nan")), ("confidence", -0.5),
-                         ("index_tip", np.array([np.inf, 0, 0]))]:
+    for field, value in [
+        ("grab_strength", 1.5),
+        ("pinch_strength", float("nan")),
+        ("confidence", -0.5),
+        ("index_tip", np.array([np.inf, 0, 0])),
+    ]:
         bad = HandSample(stamp=1.0, position=np.zeros(3), orientation=np.array([0, 0, 0, 1.0]), **{field: value})
         assert validate_sample(bad) == "bad_hand_field", field
 
@@ -284,6 +312,7 @@ def test_sequencer_drops_non_numeric_fields_as_malformed():
 def test_the_plain_float_gram_matrix_is_numpys():
     from motion_common.float_list import float_list
     from motion_sensor.sequencing.filters import _gram
+
     rng = np.random.default_rng(11)
     quats = rng.normal(size=(10, 4))
     np.testing.assert_allclose(_gram(quats.tolist()), quats.T @ quats, rtol=0, atol=1e-14)

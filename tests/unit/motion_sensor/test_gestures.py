@@ -1,5 +1,6 @@
 """Gesture recognition: static poses (hysteresis, dwell, hold-still), DTW classification
 and rejection, spotting, no false positives on the real recordings, template files."""
+
 import glob
 import os
 import sys
@@ -7,7 +8,6 @@ import sys
 import numpy as np
 import pytest
 
-from ..conftest import DATA, ROOT
 from motion_common.errors import ParameterError
 from motion_sensor.gestures.dtw_classifier import DTWClassifier
 from motion_sensor.gestures.gesture_features import FeatureConfig, features
@@ -16,6 +16,8 @@ from motion_sensor.gestures.gesture_recognizer import DEFAULT_TEMPLATES, Gesture
 from motion_sensor.gestures.gesture_spotter import GestureSpotter
 from motion_sensor.gestures.gesture_templates import load_templates, read_path, save_template, write_atomic
 from motion_sensor.gestures.static_poses import StaticPoseDetector
+
+from ..conftest import DATA, ROOT
 
 sys.path.insert(0, os.path.join(ROOT, "tests", "tools"))
 import air_letters  # noqa: E402
@@ -44,6 +46,7 @@ def run(detector, frames):
 
 # ---------------------------------------------------------------- static poses
 
+
 def test_fist_fires_after_dwell_once_and_ends_with_hysteresis():
     det = StaticPoseDetector({"fist_dwell_s": 0.2, "grab_on": 0.8, "grab_off": 0.5})
     grab = [0.0] * 10 + [0.9] * 40 + [0.7] * 20 + [0.3] * 10  # 0.7 is inside the band: still a fist
@@ -66,8 +69,9 @@ def test_chattering_grab_at_threshold_gives_one_fist():
 
 def test_pinch_but_not_when_fist():
     det = StaticPoseDetector({"pinch_dwell_s": 0.1, "fist_dwell_s": 0.1})
-    values = [{"grab": 0.1, "pinch": 0.95}] * 30 + [{"grab": 0.1, "pinch": 0.2}] * 10 \
-        + [{"grab": 0.95, "pinch": 0.95}] * 30
+    values = (
+        [{"grab": 0.1, "pinch": 0.95}] * 30 + [{"grab": 0.1, "pinch": 0.2}] * 10 + [{"grab": 0.95, "pinch": 0.95}] * 30
+    )
     names = [e[0] for e in run(det, stream(values))]
     assert names.count("pinch") == 1 and names.count("pinch_end") == 1 and "fist" in names
     assert names.index("pinch_end") < names.index("fist")
@@ -75,7 +79,9 @@ def test_pinch_but_not_when_fist():
 
 def test_open_palm_and_unknown_strength_is_no_evidence():
     det = StaticPoseDetector({"open_dwell_s": 0.3})
-    values = [{"grab": 0.0, "pinch": 0.0}] * 20 + [{"grab": -1.0, "pinch": -1.0}] * 5 + [{"grab": 0.0, "pinch": 0.0}] * 20
+    values = (
+        [{"grab": 0.0, "pinch": 0.0}] * 20 + [{"grab": -1.0, "pinch": -1.0}] * 5 + [{"grab": 0.0, "pinch": 0.0}] * 20
+    )
     names = [e[0] for e in run(det, stream(values)) if "open" in e[0]]
     assert names == []  # 0.19 s, then unknown restarts the dwell, then 0.19 s
     names = [e[0] for e in run(det, stream([{"grab": 0.0, "pinch": 0.05}] * 40, start=5.0)) if "open" in e[0]]
@@ -90,8 +96,13 @@ def test_palm_only_device_never_reports_hand_poses():
 
 def test_second_hand_with_dwell_and_end():
     det = StaticPoseDetector({"second_hand_dwell_s": 0.2})
-    values = [{"hands_num": 1}] * 10 + [{"hands_num": 2}] * 10 + [{"hands_num": 1}] * 5 + [{"hands_num": 2}] * 30 \
+    values = (
+        [{"hands_num": 1}] * 10
+        + [{"hands_num": 2}] * 10
         + [{"hands_num": 1}] * 5
+        + [{"hands_num": 2}] * 30
+        + [{"hands_num": 1}] * 5
+    )
     events = [e for e in run(det, stream(values)) if "second" in e[0]]
     assert events == [("second_hand", pytest.approx(0.45)), ("second_hand_end", pytest.approx(0.55))]
 
@@ -129,11 +140,14 @@ def test_real_grab_recording_gives_fist_then_release():
     names = [e.name for f in frames_from_recording(os.path.join(DATA, "grab.jsonl.gz")) for e in det.update(f)]
     assert "fist" in names and names.index("fist") < names.index("fist_end")
     det = StaticPoseDetector()
-    names = [e.name for f in frames_from_recording(os.path.join(DATA, "Waiting-110fps.jsonl.gz")) for e in det.update(f)]
+    names = [
+        e.name for f in frames_from_recording(os.path.join(DATA, "Waiting-110fps.jsonl.gz")) for e in det.update(f)
+    ]
     assert "hold_still" in names and "fist" not in names
 
 
 # ---------------------------------------------------------------- DTW classification
+
 
 def _letters(subjects, seed=7):
     data = air_letters.dataset(subjects, 1, seed=seed)
@@ -143,7 +157,7 @@ def _letters(subjects, seed=7):
 def test_features_are_invariant_to_position_scale_and_speed(rng):
     t = np.linspace(0, 1, 400)
     path = np.column_stack([np.cos(3 * t), np.sin(5 * t), t])
-    slow = np.column_stack([np.cos(3 * t ** 2), np.sin(5 * t ** 2), t ** 2])
+    slow = np.column_stack([np.cos(3 * t**2), np.sin(5 * t**2), t**2])
     a = features(path)
     assert a.shape == (48, 6) and a.flags["C_CONTIGUOUS"]
     assert np.allclose(features(path * 7 + [1, 2, 3]), a, atol=1e-9)
@@ -160,8 +174,10 @@ def test_plane_alignment_undoes_a_tilted_writing_plane():
     assert np.abs(features(tilted, config=config) - features(flat, config=config)).max() < 0.2
     assert np.abs(features(tilted, config=plain) - features(flat, config=plain)).max() > 0.3
     line = np.column_stack([np.linspace(0, 1, 50), np.zeros(50), np.zeros(50)])
-    assert np.allclose(features(line @ air_letters._rotation(0.3, 0.2).T, config=config),
-                       features(line @ air_letters._rotation(0.3, 0.2).T, config=plain))  # no plane: untouched
+    assert np.allclose(
+        features(line @ air_letters._rotation(0.3, 0.2).T, config=config),
+        features(line @ air_letters._rotation(0.3, 0.2).T, config=plain),
+    )  # no plane: untouched
 
 
 @pytest.mark.parametrize("kwargs", [{}, {"k": 3}, {"config": FeatureConfig(plane="align", length=32)}])
@@ -173,14 +189,15 @@ def test_dtw_cascade_equals_full_scan(kwargs):
         q = clf.features(points, times)
         result = clf.classify_features(q)
         full = np.array([clf.dtw(q, t) for t in clf._data])
-        order = np.argsort(full, kind="stable")[:clf.k]
+        order = np.argsort(full, kind="stable")[: clf.k]
         if clf.k == 1:
             assert result.candidate == clf.labels[order[0]]
         else:  # the same k nearest as a full scan, so the same vote
             best, _, _ = clf.scan(q, clf.k)
             assert [d for d, _ in best] == pytest.approx(list(full[order]))
-        assert result.distance == pytest.approx(full[[i for i, lab in enumerate(clf.labels)
-                                                      if lab == result.candidate]].min() / np.sqrt(clf.config.length))
+        assert result.distance == pytest.approx(
+            full[[i for i, lab in enumerate(clf.labels) if lab == result.candidate]].min() / np.sqrt(clf.config.length)
+        )
         calls.append(result.dtw_calls)
     assert np.mean(calls) < len(clf)  # the lower bounds pruned something
 
@@ -191,7 +208,8 @@ def _baseline_accuracy(train, test):
 
     def prep(p):
         p = p - p.mean(axis=0)
-        return np.ascontiguousarray(p / np.sqrt((p ** 2).sum(axis=1).mean()))
+        return np.ascontiguousarray(p / np.sqrt((p**2).sum(axis=1).mean()))
+
     templates = [(label, prep(p)) for label, p, _ in train]
     correct = 0
     for label, p, _ in test:
@@ -230,6 +248,7 @@ def test_open_set_rejects_non_gestures_closed_set_does_not(rng):
 
 
 # ---------------------------------------------------------------- spotting
+
 
 def _with_pauses(path, rng, rest=60):
     rest_a = np.repeat(path[:1], rest, axis=0) + rng.normal(0, 0.0003, (rest, 3))
@@ -281,12 +300,14 @@ def test_no_false_gestures_on_real_recordings(path):
 
 # ---------------------------------------------------------------- template files
 
+
 def test_shipped_templates_match_the_generator(tmp_path):
     make_gesture_templates.write_templates(str(tmp_path))
     shipped = sorted(glob.glob(os.path.join(DEFAULT_TEMPLATES, "*", "*.csv")))
     generated = sorted(glob.glob(os.path.join(str(tmp_path), "*", "*.csv")))
-    assert [os.path.relpath(p, DEFAULT_TEMPLATES) for p in shipped] == \
-        [os.path.relpath(p, str(tmp_path)) for p in generated]
+    assert [os.path.relpath(p, DEFAULT_TEMPLATES) for p in shipped] == [
+        os.path.relpath(p, str(tmp_path)) for p in generated
+    ]
     for a, b in zip(shipped, generated):
         with open(a) as fa, open(b) as fb:
             assert fa.read() == fb.read(), a
@@ -332,8 +353,9 @@ def test_a_fist_is_not_a_pinch_clutch():
     classifier = load_classifier(DEFAULT_TEMPLATES)
     rng = np.random.default_rng(3)
     path, _ = make_gesture_templates.gesture_path("swipe_up", rng, 90.0)
-    frames = [GestureFrame(i / 90.0, p, pinch=1.0, grab=1.0 if 5 <= i < len(path) - 5 else 0.0)
-              for i, p in enumerate(path)]
+    frames = [
+        GestureFrame(i / 90.0, p, pinch=1.0, grab=1.0 if 5 <= i < len(path) - 5 else 0.0) for i, p in enumerate(path)
+    ]
     spotter = GestureSpotter(classifier, {"mode": "clutch"})
     assert [e.name for f in frames for e in spotter.update(f)] == []
     assert any(s.reason == "a fist, not a pinch" for s in spotter.segments)

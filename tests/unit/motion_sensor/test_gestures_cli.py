@@ -1,4 +1,5 @@
 """gesture_eval and record_gesture end to end, as subprocesses of the project's python."""
+
 import json
 import os
 import subprocess
@@ -41,9 +42,24 @@ def test_gesture_eval_end_to_end(tmp_path):
     with open(header_file, "w") as fh:
         fh.write("# recorded by a Leap, mm / ms\nx y z t\n" + body)
     plot = str(tmp_path / "confusion.png")
-    proc = subprocess.run([PYTHON, os.path.join(NODES, "gesture_eval"), "--train", train, "--test", test,
-                           "--json", "--plot", plot, "--reject"], capture_output=True, text=True, timeout=120,
-                          env={k: v for k, v in os.environ.items() if k != "PYTHONPATH"})
+    proc = subprocess.run(
+        [
+            PYTHON,
+            os.path.join(NODES, "gesture_eval"),
+            "--train",
+            train,
+            "--test",
+            test,
+            "--json",
+            "--plot",
+            plot,
+            "--reject",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={k: v for k, v in os.environ.items() if k != "PYTHONPATH"},
+    )
     assert proc.returncode == 0, proc.stderr
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result["n_train"] == 18 and result["n_test"] == 12  # junk.csv left out
@@ -56,11 +72,16 @@ def test_gesture_eval_end_to_end(tmp_path):
 
 
 def test_gesture_eval_help_and_bad_folder(tmp_path):
-    proc = subprocess.run([PYTHON, os.path.join(NODES, "gesture_eval"), "--help"], capture_output=True, text=True,
-                          timeout=60)
+    proc = subprocess.run(
+        [PYTHON, os.path.join(NODES, "gesture_eval"), "--help"], capture_output=True, text=True, timeout=60
+    )
     assert proc.returncode == 0 and "--train" in proc.stdout and "x y z t" in proc.stdout
-    proc = subprocess.run([PYTHON, os.path.join(NODES, "gesture_eval"), "--train", str(tmp_path / "none"),
-                           "--test", str(tmp_path)], capture_output=True, text=True, timeout=60)
+    proc = subprocess.run(
+        [PYTHON, os.path.join(NODES, "gesture_eval"), "--train", str(tmp_path / "none"), "--test", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert proc.returncode == 2 and "does not exist" in proc.stderr
 
 
@@ -72,15 +93,25 @@ def test_gesture_eval_imports_no_rospy():
 
 def test_record_gesture_cuts_a_segment_from_a_recording(tmp_path):
     out = str(tmp_path / "gestures")
-    cmd = [PYTHON, os.path.join(NODES, "record_gesture"), "roll", "--from",
-           os.path.join(DATA, "rollAndPitchCropped.jsonl.gz"), "--dir", out, "--source", "index"]
+    cmd = [
+        PYTHON,
+        os.path.join(NODES, "record_gesture"),
+        "roll",
+        "--from",
+        os.path.join(DATA, "rollAndPitchCropped.jsonl.gz"),
+        "--dir",
+        out,
+        "--source",
+        "index",
+    ]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     written = os.path.join(out, "roll", "001.csv")
     rows = np.loadtxt(written)
     assert rows.shape[1] == 4 and len(rows) > 20 and np.all(np.diff(rows[:, 3]) > 0)
     assert np.linalg.norm(np.ptp(rows[:, :3], axis=0)) > 60  # mm
-    proc = subprocess.run(cmd[:4] + [os.path.join(DATA, "wave.jsonl.gz"), "--dir", out], capture_output=True,
-                          text=True, timeout=60)
+    proc = subprocess.run(
+        cmd[:4] + [os.path.join(DATA, "wave.jsonl.gz"), "--dir", out], capture_output=True, text=True, timeout=60
+    )
     assert proc.returncode == 1 and "no gesture spotted" in proc.stderr
     assert sorted(os.listdir(os.path.join(out, "roll"))) == ["001.csv"]

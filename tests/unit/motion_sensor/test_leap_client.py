@@ -1,4 +1,5 @@
 """The Leap WebSocket client against a local Leap v6 replay server on loopback."""
+
 import os
 import socket
 import threading
@@ -7,10 +8,11 @@ import time
 import numpy as np
 import pytest
 
-from ..conftest import DATA
-from motion_sensor.errors import MotionSensorError
 from motion_sensor.devices.leap_client import FOCUSED, Backoff, ClockMapper, LeapClient
 from motion_sensor.devices.leap_server import Faults, LeapReplayServer
+from motion_sensor.errors import MotionSensorError
+
+from ..conftest import DATA
 
 RECORDING = os.path.join(DATA, "wave.jsonl.gz")
 
@@ -23,8 +25,14 @@ def free_port():
 
 def collect(port, until, timeout=15.0, **kw):
     frames, problems = [], []
-    client = LeapClient("127.0.0.1", port, on_frame=lambda f, t: frames.append((f, t)), on_problem=problems.append,
-                        backoff=Backoff(0.05, 2.0, 0.2), **kw)
+    client = LeapClient(
+        "127.0.0.1",
+        port,
+        on_frame=lambda f, t: frames.append((f, t)),
+        on_problem=problems.append,
+        backoff=Backoff(0.05, 2.0, 0.2),
+        **kw,
+    )
     thread = threading.Thread(target=client.run, daemon=True)
     thread.start()
     deadline = time.monotonic() + timeout
@@ -92,8 +100,14 @@ def test_reconnects_with_backoff_after_a_drop():
         waits.append(seconds)
         allowed.acquire(timeout=10)
 
-    client = LeapClient("127.0.0.1", port, on_frame=lambda f, t: frames.append(f), on_problem=problems.append,
-                        backoff=Backoff(0.05, 2.0, 0.2), wait=wait)
+    client = LeapClient(
+        "127.0.0.1",
+        port,
+        on_frame=lambda f, t: frames.append(f),
+        on_problem=problems.append,
+        backoff=Backoff(0.05, 2.0, 0.2),
+        wait=wait,
+    )
     thread = threading.Thread(target=client.run, daemon=True)
     thread.start()
     for _ in range(3):  # nobody listening yet: refused, retried with growing delays

@@ -1,4 +1,5 @@
 """Leap v6 protocol parsing: units, axes, orientation, and rejection of bad messages."""
+
 import gzip
 import json
 import os
@@ -7,16 +8,29 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ..conftest import DATA
+from motion_sensor.devices.leap_v6 import (
+    LEAP_TO_REP103,
+    frame_to_sample,
+    palm_orientation,
+    parse_message,
+    read_recording,
+    select_primary,
+)
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.devices.leap_v6 import (LEAP_TO_REP103, frame_to_sample, palm_orientation, parse_message,
-                                   read_recording, select_primary)
+
+from ..conftest import DATA
 
 
 def hand(**overrides):
-    base = {"id": 7, "type": "right", "confidence": 0.9, "palmPosition": [10.0, 200.0, -30.0],
-            "palmNormal": [0.0, -1.0, 0.0], "direction": [0.0, 0.0, -1.0],
-            "stabilizedPalmPosition": [11.0, 201.0, -29.0]}
+    base = {
+        "id": 7,
+        "type": "right",
+        "confidence": 0.9,
+        "palmPosition": [10.0, 200.0, -30.0],
+        "palmNormal": [0.0, -1.0, 0.0],
+        "direction": [0.0, 0.0, -1.0],
+        "stabilizedPalmPosition": [11.0, 201.0, -29.0],
+    }
     base.update(overrides)
     return base
 
@@ -56,26 +70,32 @@ def test_version_handshake_is_not_a_frame():
     assert parse_message('{"version":6}') is None
 
 
-@pytest.mark.parametrize("text, fragment", [
-    ('{"id": 1, "timestamp": 5, "hands": [', "malformed"),
-    ("[1, 2]", "JSON object"),
-    ('{"id": 1, "hands": []}', "timestamp"),
-    ('{"id": 1, "timestamp": "soon", "hands": []}', "timestamp"),
-    ('{"id": 1, "timestamp": 5, "hands": {}}', "hands"),
-])
+@pytest.mark.parametrize(
+    "text, fragment",
+    [
+        ('{"id": 1, "timestamp": 5, "hands": [', "malformed"),
+        ("[1, 2]", "JSON object"),
+        ('{"id": 1, "hands": []}', "timestamp"),
+        ('{"id": 1, "timestamp": "soon", "hands": []}', "timestamp"),
+        ('{"id": 1, "timestamp": 5, "hands": {}}', "hands"),
+    ],
+)
 def test_malformed_frames_are_rejected_with_a_reason(text, fragment):
     with pytest.raises(MotionSensorError, match=fragment):
         parse_message(text)
 
 
-@pytest.mark.parametrize("override, fragment", [
-    ({"palmPosition": [1.0, 2.0]}, "palmPosition"),
-    ({"palmPosition": [1.0, "x", 3.0]}, "palmPosition"),
-    ({"palmNormal": None}, "palmNormal"),
-    ({"type": "middle"}, "type"),
-    ({"id": "seven"}, "id"),
-    ({"direction": [0.0, 0.0, 0.0]}, "direction"),
-])
+@pytest.mark.parametrize(
+    "override, fragment",
+    [
+        ({"palmPosition": [1.0, 2.0]}, "palmPosition"),
+        ({"palmPosition": [1.0, "x", 3.0]}, "palmPosition"),
+        ({"palmNormal": None}, "palmNormal"),
+        ({"type": "middle"}, "type"),
+        ({"id": "seven"}, "id"),
+        ({"direction": [0.0, 0.0, 0.0]}, "direction"),
+    ],
+)
 def test_bad_hand_fields_are_named(override, fragment):
     with pytest.raises(MotionSensorError, match=fragment):
         parse_message(frame([hand(**override)]))

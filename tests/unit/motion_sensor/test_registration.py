@@ -1,4 +1,5 @@
 """DTW registration between hand and robot space: known transforms are recovered."""
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -8,8 +9,9 @@ from motion_sensor.registration.device_registration import Registration, registe
 
 
 def figure(u):
-    return np.column_stack([0.1 * np.sin(2 * np.pi * u), 0.07 * np.sin(4 * np.pi * u + 0.5),
-                            0.05 * np.sin(6 * np.pi * u + 1.0)])
+    return np.column_stack(
+        [0.1 * np.sin(2 * np.pi * u), 0.07 * np.sin(4 * np.pi * u + 0.5), 0.05 * np.sin(6 * np.pi * u + 1.0)]
+    )
 
 
 def test_umeyama_recovers_a_similarity_and_never_a_reflection(rng):

@@ -1,6 +1,7 @@
 """Every motion_sensor node's parameters through motion_common.params: the shipped YAMLs
 validate, a misspelt key is refused naming the file, the key and the valid keys, and every
 parameter the launch files and rostests set is declared."""
+
 import inspect
 import os
 import re
@@ -9,13 +10,14 @@ import shutil
 import pytest
 import yaml
 
-from ..conftest import ROOT
 from motion_common.errors import ParameterError
-from motion_sensor.sequencing.filters import FILTER_PARAMS, FILTERS
 from motion_sensor.devices.leap_client import LeapDevice
 from motion_sensor.devices.replay import ReplayDevice
-from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS, Sequencer, sequencer_setup
 from motion_sensor.devices.spacemouse import SpaceMouseDevice
+from motion_sensor.sequencing.filters import FILTER_PARAMS, FILTERS
+from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS, Sequencer, sequencer_setup
+
+from ..conftest import ROOT
 
 CONFIG = os.path.join(ROOT, "src", "motion_sensor", "config")
 
@@ -23,11 +25,16 @@ CONFIG = os.path.join(ROOT, "src", "motion_sensor", "config")
 def node_schema(device_cls):
     """The device node's schema, from its ROS-free declaration."""
     from motion_sensor.devices.device_interface import node_schema as schema
+
     return schema(device_cls)
 
 
-SCHEMAS = {"sequencer.yaml": lambda: SEQUENCER_PARAMS, "spacemouse.yaml": lambda: node_schema(SpaceMouseDevice),
-           "leap.yaml": lambda: node_schema(LeapDevice), "replay.yaml": lambda: node_schema(ReplayDevice)}
+SCHEMAS = {
+    "sequencer.yaml": lambda: SEQUENCER_PARAMS,
+    "spacemouse.yaml": lambda: node_schema(SpaceMouseDevice),
+    "leap.yaml": lambda: node_schema(LeapDevice),
+    "replay.yaml": lambda: node_schema(ReplayDevice),
+}
 
 
 def load(name):
@@ -50,8 +57,15 @@ def test_shipped_sequencer_yaml_builds_every_filter():
     assert config.filter_params == {"queue_size": 4}
 
 
-@pytest.mark.parametrize("name,misspelt", [("sequencer.yaml", "max_age"), ("spacemouse.yaml", "deadzon"),
-                                           ("leap.yaml", "hots"), ("replay.yaml", "start_ofset")])
+@pytest.mark.parametrize(
+    "name,misspelt",
+    [
+        ("sequencer.yaml", "max_age"),
+        ("spacemouse.yaml", "deadzon"),
+        ("leap.yaml", "hots"),
+        ("replay.yaml", "start_ofset"),
+    ],
+)
 def test_misspelt_key_in_a_copy_is_refused_with_file_key_and_valid_keys(tmp_path, name, misspelt):
     copy = tmp_path / name
     shutil.copy(os.path.join(CONFIG, name), copy)
@@ -84,13 +98,22 @@ def test_filter_schema_defaults_are_the_constructors():
         assert declared == {k: p.default for k, p in signature.parameters.items() if k != "self"}, name
 
 
-LAUNCH_NODES = {"sequencer": lambda: SEQUENCER_PARAMS, "spacemouse_driver": lambda: node_schema(SpaceMouseDevice),
-                "leap_driver": lambda: node_schema(LeapDevice), "hand_replay": lambda: node_schema(ReplayDevice)}
+LAUNCH_NODES = {
+    "sequencer": lambda: SEQUENCER_PARAMS,
+    "spacemouse_driver": lambda: node_schema(SpaceMouseDevice),
+    "leap_driver": lambda: node_schema(LeapDevice),
+    "hand_replay": lambda: node_schema(ReplayDevice),
+}
 
 
 def test_every_param_launch_files_and_rostests_set_is_declared():
     from xml.etree import ElementTree
-    files = [os.path.join(ROOT, "src", "motion_bringup", "launch", f) for f in os.listdir(os.path.join(ROOT, "src", "motion_bringup", "launch")) if f.endswith(".launch")]
+
+    files = [
+        os.path.join(ROOT, "src", "motion_bringup", "launch", f)
+        for f in os.listdir(os.path.join(ROOT, "src", "motion_bringup", "launch"))
+        if f.endswith(".launch")
+    ]
     files += [os.path.join(ROOT, "tests", "rostest", f) for f in os.listdir(os.path.join(ROOT, "tests", "rostest"))]
     seen = 0
     for path in files:
@@ -100,7 +123,10 @@ def test_every_param_launch_files_and_rostests_set_is_declared():
                 schema = LAUNCH_NODES[node.get("type")]()
                 for param in node.findall("param"):
                     seen += 1
-                    assert param.get("name") in schema.params or param.get("name") == "config_file", (path, param.attrib)
+                    assert param.get("name") in schema.params or param.get("name") == "config_file", (
+                        path,
+                        param.attrib,
+                    )
         for param in root.findall("param"):  # e.g. <param name="hand_replay/topic" .../>
             node, _, key = param.get("name").rpartition("/")
             if node in LAUNCH_NODES:

@@ -1,4 +1,5 @@
 """SpaceMouse: HID report decoding, rate integration, the reconnecting reader, report logs."""
+
 import struct
 import threading
 
@@ -6,10 +7,18 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from motion_sensor.errors import MotionSensorError
 from motion_sensor.devices.leap_client import Backoff
-from motion_sensor.devices.spacemouse import (RateConfig, RateIntegrator, SpaceMouseDecoder, SpaceMouseReader,
-                                      SpaceMouseState, find_device, format_report_line, read_report_log)
+from motion_sensor.devices.spacemouse import (
+    RateConfig,
+    RateIntegrator,
+    SpaceMouseDecoder,
+    SpaceMouseReader,
+    SpaceMouseState,
+    find_device,
+    format_report_line,
+    read_report_log,
+)
+from motion_sensor.errors import MotionSensorError
 
 from ..conftest import ROOT
 
@@ -95,8 +104,16 @@ def test_a_long_gap_is_integrated_as_max_step_only():
     assert position[0] - 0.0 == pytest.approx(0.15 * 0.05)
 
 
-@pytest.mark.parametrize("field,value", [("deadzone", 1.0), ("max_speed_mps", 0.0), ("hold_timeout_s", float("nan")),
-                                         ("axis_signs", (1, 1, 1, 1, 1, 2)), ("start_position_m", (0, 0))])
+@pytest.mark.parametrize(
+    "field,value",
+    [
+        ("deadzone", 1.0),
+        ("max_speed_mps", 0.0),
+        ("hold_timeout_s", float("nan")),
+        ("axis_signs", (1, 1, 1, 1, 1, 2)),
+        ("start_position_m", (0, 0)),
+    ],
+)
 def test_bad_rate_parameters_are_named(field, value):
     with pytest.raises(MotionSensorError, match=field):
         RateIntegrator(RateConfig(**{field: value}))
@@ -136,12 +153,19 @@ class FakeHid:
 
 
 def test_reader_reconnects_after_an_unplug_and_closes_the_device():
-    hid = FakeHid([{"vendor_id": 0x256F, "product_id": 0xC635, "product_string": "x"}],
-                  [report(1, 1, 2, 3), OSError("read error"), report(1, 4, 5, 6)])
+    hid = FakeHid(
+        [{"vendor_id": 0x256F, "product_id": 0xC635, "product_string": "x"}],
+        [report(1, 1, 2, 3), OSError("read error"), report(1, 4, 5, 6)],
+    )
     got, problems, connects = [], [], []
-    reader = SpaceMouseReader(lambda r, t: got.append(r), problems.append, hid_module=hid,
-                              backoff=Backoff(initial=0.001, maximum=0.001), clock=lambda: 1.0,
-                              on_connect=connects.append)
+    reader = SpaceMouseReader(
+        lambda r, t: got.append(r),
+        problems.append,
+        hid_module=hid,
+        backoff=Backoff(initial=0.001, maximum=0.001),
+        clock=lambda: 1.0,
+        on_connect=connects.append,
+    )
     hid.reader = reader
     thread = threading.Thread(target=reader.run)
     thread.start()
@@ -154,8 +178,10 @@ def test_reader_reconnects_after_an_unplug_and_closes_the_device():
 
 
 def test_find_device_knows_models_and_honours_explicit_ids():
-    devices = [{"vendor_id": 0x1234, "product_id": 0x1, "product_string": "keyboard"},
-               {"vendor_id": 0x046D, "product_id": 0xC626, "product_string": "3Dconnexion SpaceNavigator"}]
+    devices = [
+        {"vendor_id": 0x1234, "product_id": 0x1, "product_string": "keyboard"},
+        {"vendor_id": 0x046D, "product_id": 0xC626, "product_string": "3Dconnexion SpaceNavigator"},
+    ]
     hid = FakeHid(devices, [])
     assert find_device(hid) == (0x046D, 0xC626, "SpaceNavigator")
     assert find_device(hid, 0x1234, 0x1) == (0x1234, 0x1, "keyboard")
@@ -185,10 +211,14 @@ def test_committed_report_log_is_what_its_generator_writes(tmp_path):
     import os
     import subprocess
     import sys
+
     tests = os.path.join(ROOT, "tests")
     fresh = tmp_path / "log.hidlog"
-    subprocess.run([sys.executable, os.path.join(tests, "tools", "make_spacemouse_log.py"), str(fresh)],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [sys.executable, os.path.join(tests, "tools", "make_spacemouse_log.py"), str(fresh)],
+        check=True,
+        capture_output=True,
+    )
     with open(os.path.join(tests, "data", "spacemouse_push_forward.hidlog"), encoding="utf-8") as fh:
         assert fh.read() == fresh.read_text()
     rows = read_report_log(str(fresh))

@@ -1,18 +1,29 @@
 """Webcam hand maths, tracker and device on synthetic landmarks and fake captures (no
 MediaPipe, no camera): depth from apparent size, palm pose and axes, grab and pinch,
 bad frames, primary hand and tracking id, video playback timing, decode failures."""
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 from motion_sensor.devices.device import DeviceRunner
-from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
-from motion_sensor.devices.hand_landmarks import (OPTICAL_TO_REP103, DetectedHand, GestureThresholds, Intrinsics,
-                                          calibrate_depth_scale, estimate_depth, finger_curls, grab_strength,
-                                          landmark_problem, palm_pose, pinch_strength)
+from motion_sensor.devices.hand_landmarks import (
+    OPTICAL_TO_REP103,
+    DetectedHand,
+    GestureThresholds,
+    Intrinsics,
+    calibrate_depth_scale,
+    estimate_depth,
+    finger_curls,
+    grab_strength,
+    landmark_problem,
+    palm_pose,
+    pinch_strength,
+)
 from motion_sensor.devices.mediapipe_hands import HandDetector
 from motion_sensor.devices.webcam_device import WebcamHandDevice, load_depth_scale
 from motion_sensor.devices.webcam_hand import FrameLimits, WebcamHandTracker, frame_problem
+from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
 
 K = Intrinsics(600.0, 600.0, 320.0, 240.0)
 # Finger bases (x along the fingers, y towards the thumb of a right hand, m) and segment lengths.
@@ -46,8 +57,12 @@ def place(local, rotation, centre_optical, intrinsics=K, handedness="right", sco
     palm = local[[0, 5, 9, 13, 17]].mean(axis=0)
     world = (rotation @ (local - palm).T).T
     camera = world + np.asarray(centre_optical)
-    image = np.column_stack([intrinsics.fx * camera[:, 0] / camera[:, 2] + intrinsics.cx,
-                             intrinsics.fy * camera[:, 1] / camera[:, 2] + intrinsics.cy])
+    image = np.column_stack(
+        [
+            intrinsics.fx * camera[:, 0] / camera[:, 2] + intrinsics.cx,
+            intrinsics.fy * camera[:, 1] / camera[:, 2] + intrinsics.cy,
+        ]
+    )
     return DetectedHand(image=image, world=world - world.mean(axis=0), handedness=handedness, score=score)
 
 
@@ -82,11 +97,11 @@ def test_palm_pose_position_and_axes(rng):
 def test_rep103_axes_of_a_hand_facing_the_camera():
     pose = palm_pose(place(local_hand(), facing_camera(), [0.05, -0.02, 0.5]), K)
     matrix = Rotation.from_quat(pose.orientation).as_matrix()
-    assert pose.position[0] == pytest.approx(0.5, abs=0.02)          # forward = depth
-    assert pose.position[1] == pytest.approx(-0.05, abs=0.01)        # image right = -y (left)
-    assert pose.position[2] == pytest.approx(0.02, abs=0.01)         # image up = +z
-    np.testing.assert_allclose(matrix[:, 0], [0, 0, 1], atol=0.05)   # fingers up
-    np.testing.assert_allclose(matrix[:, 2], [1, 0, 0], atol=0.05)   # back of the hand away from the camera
+    assert pose.position[0] == pytest.approx(0.5, abs=0.02)  # forward = depth
+    assert pose.position[1] == pytest.approx(-0.05, abs=0.01)  # image right = -y (left)
+    assert pose.position[2] == pytest.approx(0.02, abs=0.01)  # image up = +z
+    np.testing.assert_allclose(matrix[:, 0], [0, 0, 1], atol=0.05)  # fingers up
+    np.testing.assert_allclose(matrix[:, 2], [1, 0, 0], atol=0.05)  # back of the hand away from the camera
 
 
 def test_depth_scale_scales_position_and_calibration_recovers_it():
@@ -158,11 +173,14 @@ def test_tracker_bad_frames_go_out_without_a_hand_and_are_counted():
     right = place(local_hand(), facing_camera(), [0, 0, 0.5])
     detector = FakeDetector([[right]])
     tracker = WebcamHandTracker(detector, intrinsics=K)
-    outputs = [tracker.process(grey_frame(0), 1.0), tracker.process(grey_frame(255), 2.0),
-               tracker.process(grey_frame(), 3.0)]
+    outputs = [
+        tracker.process(grey_frame(0), 1.0),
+        tracker.process(grey_frame(255), 2.0),
+        tracker.process(grey_frame(), 3.0),
+    ]
     assert [s.hands_num for s in outputs] == [0, 0, 1]
     assert [s.stamp for s in outputs] == [1.0, 2.0, 3.0]
-    assert len(detector.images) == 1                # bad frames never reach the detector
+    assert len(detector.images) == 1  # bad frames never reach the detector
     assert tracker.counters["black_frames"] == 1 and tracker.counters["saturated_frames"] == 1
     assert tracker.process(grey_frame(), 4.0).hands_num == 0
     assert tracker.counters["no_hand"] == 1 and tracker.counters["frames"] == 4
@@ -181,9 +199,9 @@ def test_tracker_primary_hand_types_gesture_fields_and_ids():
     assert 0 <= samples[0].grab_strength <= 0.1 and samples[0].pinch_strength == 0.0
     assert samples[0].index_tip is not None and samples[0].index_tip[2] > samples[0].position[2]
     assert samples[1].hand_types == ("right", "left") and tracker.counters["bad_landmarks"] == 1
-    assert samples[2].hand_types == ("left",)       # no right hand: the one seen steers
+    assert samples[2].hand_types == ("left",)  # no right hand: the one seen steers
     ids = [s.hand_id for s in samples]
-    assert ids[0] == ids[1] and ids[2] != ids[1]    # the steering hand changed
+    assert ids[0] == ids[1] and ids[2] != ids[1]  # the steering hand changed
     assert samples[3].hands_num == 0 and ids[4] not in (ids[0], ids[2])  # a hand after none is new
 
 
@@ -208,6 +226,7 @@ class FakeCapture:
 
     def get(self, prop):
         import cv2
+
         return {cv2.CAP_PROP_FPS: self.fps, cv2.CAP_PROP_FRAME_COUNT: len(self.frames)}.get(prop, 0.0)
 
     def set(self, prop, value):
@@ -241,12 +260,18 @@ class FakeClock:
 def webcam_device(tmp_path, frames, detections, **overrides):
     video = tmp_path / "clip.avi"
     video.write_bytes(b"not read: the capture is a fake")
-    config = WebcamHandDevice.params.validate({"video": str(video), "camera": -1, "fx": 600.0, "cx": 320.0,
-                                               "cy": 240.0, **overrides}, "test")
+    config = WebcamHandDevice.params.validate(
+        {"video": str(video), "camera": -1, "fx": 600.0, "cx": 320.0, "cy": 240.0, **overrides}, "test"
+    )
     clock = FakeClock()
     capture = FakeCapture(frames)
-    device = WebcamHandDevice(config, detector_factory=lambda cfg: FakeDetector(detections),
-                              capture_factory=lambda source: capture, clock=clock, sleep=clock.sleep)
+    device = WebcamHandDevice(
+        config,
+        detector_factory=lambda cfg: FakeDetector(detections),
+        capture_factory=lambda source: capture,
+        clock=clock,
+        sleep=clock.sleep,
+    )
     return device, clock, capture
 
 
@@ -256,8 +281,8 @@ def test_video_plays_each_frame_once_at_its_time_then_ends(tmp_path):
     device, clock, capture = webcam_device(tmp_path, frames, [[]] + [[hand]] * 5)  # [] for the warm-up
     published = []
     runner = DeviceRunner(device, published.append, stopped=lambda: False)
-    assert runner.run() is True                    # EndOfStream: finished
-    assert len(published) == 5                     # one message per decoded frame
+    assert runner.run() is True  # EndOfStream: finished
+    assert len(published) == 5  # one message per decoded frame
     stamps = [s.stamp for s in published]
     np.testing.assert_allclose(stamps, 100.0 + np.array([0, 1, 2, 4, 5]) / 25.0)  # each frame's own time
     assert device.counters["decode_failures"] == 1 and device.counters["hands"] == 5
@@ -268,7 +293,7 @@ def test_video_that_fell_behind_plays_on_from_now(tmp_path):
     device, clock, _ = webcam_device(tmp_path, [grey_frame()] * 3, [])
     device.open()
     first = device.read(clock())
-    clock.now += 1.0                               # a stall of 25 frame periods
+    clock.now += 1.0  # a stall of 25 frame periods
     second = device.read(clock())
     assert second.stamp == pytest.approx(clock.now) and second.stamp - first.stamp > 0.9
     assert device.counters["late_frames"] == 1
@@ -279,12 +304,18 @@ def test_video_that_fell_behind_plays_on_from_now(tmp_path):
 
 def test_camera_errors_are_retryable_and_bad_settings_fatal(tmp_path):
     config = WebcamHandDevice.params.validate({"camera": 0}, "test")
-    closed = WebcamHandDevice(config, detector_factory=lambda cfg: FakeDetector([]),
-                              capture_factory=lambda source: FakeCapture([], opened=False))
+    closed = WebcamHandDevice(
+        config,
+        detector_factory=lambda cfg: FakeDetector([]),
+        capture_factory=lambda source: FakeCapture([], opened=False),
+    )
     with pytest.raises(DeviceUnavailable):
         closed.open()
-    unplugged = WebcamHandDevice(config, detector_factory=lambda cfg: FakeDetector([]),
-                                 capture_factory=lambda source: FakeCapture([grey_frame()] * 5, grab_fails_at=1))
+    unplugged = WebcamHandDevice(
+        config,
+        detector_factory=lambda cfg: FakeDetector([]),
+        capture_factory=lambda source: FakeCapture([grey_frame()] * 5, grab_fails_at=1),
+    )
     unplugged.open()
     assert unplugged.read(0.0).hands_num == 0
     with pytest.raises(DeviceUnavailable):

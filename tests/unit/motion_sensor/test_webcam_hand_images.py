@@ -3,6 +3,7 @@ opencv-doc, tests/data/README.md): moving sequences made by warping them (the kn
 is the ground truth of the image motion), gesture strengths on open and gripping hands,
 and a video file played through the device: one message per frame, each frame's stamp,
 then the end of the stream."""
+
 import os
 import sys
 
@@ -10,11 +11,12 @@ import cv2
 import numpy as np
 import pytest
 
-from ..conftest import DATA, ROOT
 from motion_sensor.devices.device import DeviceRunner
 from motion_sensor.devices.mediapipe_hands import MediaPipeHandDetector
 from motion_sensor.devices.webcam_device import WebcamHandDevice
 from motion_sensor.devices.webcam_hand import WebcamHandTracker
+
+from ..conftest import DATA, ROOT
 
 sys.path.insert(0, os.path.join(ROOT, "tests", "tools"))
 from hand_warp import HEIGHT, WIDTH, warped_sequence  # noqa: E402
@@ -49,7 +51,7 @@ def test_palm_path_follows_the_image_motion(photo, seed):
         steps, true_steps = np.diff(pixels[found, axis]), np.diff(truth[found, axis])
         moving = np.abs(true_steps) > 2.0
         assert np.mean(np.sign(steps[moving]) == np.sign(true_steps[moving])) >= 0.9, axis
-    assert np.sqrt(np.nanmean(np.sum((pixels - truth) ** 2, axis=1))) < 15.0   # px
+    assert np.sqrt(np.nanmean(np.sum((pixels - truth) ** 2, axis=1))) < 15.0  # px
     # Depth from apparent size: a photo shown larger is a hand nearer the camera.
     depth = np.array([s.position[0] for s, f in zip(samples, found) if f])
     inverse_scale = 1.0 / sequence.scales[found]
@@ -67,8 +69,8 @@ def test_gesture_strengths_on_open_and_gripping_hands():
         assert sample.hands_num == 1, name
         assert np.all(np.isfinite(sample.position)) and sample.position[0] > 0.05
         grab[name] = sample.grab_strength
-    assert grab["handSrc.jpg"] < 0.2 and grab["Back_Projection_Theory0.jpg"] < 0.2   # open hands
-    assert grab["right04.jpg"] > 0.3                                                  # fingers round a board
+    assert grab["handSrc.jpg"] < 0.2 and grab["Back_Projection_Theory0.jpg"] < 0.2  # open hands
+    assert grab["right04.jpg"] > 0.3  # fingers round a board
 
 
 class FakeClock:

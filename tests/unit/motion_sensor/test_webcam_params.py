@@ -1,15 +1,17 @@
 """The webcam hand driver's parameters: the shipped config/webcam.yaml validates with its
 units, a misspelt key is refused naming it, and every parameter the launch files set on
 webcam_hand_driver is declared."""
+
 import os
 from xml.etree import ElementTree
 
 import pytest
 import yaml
 
-from ..conftest import ROOT
 from motion_common.errors import ParameterError
 from motion_sensor.devices.webcam_device import WebcamHandDevice
+
+from ..conftest import ROOT
 from .test_sensor_params import node_schema
 
 CONFIG = os.path.join(ROOT, "src", "motion_sensor", "config", "webcam.yaml")

@@ -1,6 +1,7 @@
 """Every node is declared once (its package's interfaces.py), and everything else agrees
 with that declaration: docs/interfaces.md, the names the node scripts use, the shipped
 YAML files, and the typed configs the Python API builds."""
+
 import ast
 import glob
 import os
@@ -16,15 +17,21 @@ while not os.path.isdir(os.path.join(ROOT, "src")):  # tests/unit/<package>/ or 
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import gen_interfaces  # noqa: E402
-
 from motion_common.interface import NodeInterface, Topic  # noqa: E402
 
 NODES = {node.node: node for node in gen_interfaces.all_interfaces()}
 
 # Executables under src/*/nodes that are command-line tools, not ROS nodes of a session
 # (no rospy.init_node, or an anonymous one-shot client): declared nowhere on purpose.
-TOOLS = {"motion_controller_client", "calibrate_camera", "register_device", "webcam_hand_calibrate",
-         "leap_replay_server", "gesture_eval", "record_gesture"}
+TOOLS = {
+    "motion_controller_client",
+    "calibrate_camera",
+    "register_device",
+    "webcam_hand_calibrate",
+    "leap_replay_server",
+    "gesture_eval",
+    "record_gesture",
+}
 
 
 def node_scripts():
@@ -83,9 +90,12 @@ def literal_names(path):
     return found
 
 
-@pytest.mark.parametrize("path", [p for p in node_scripts() if os.path.basename(p) in NODES]
-                         + [os.path.join(ROOT, "src", "dashboard", "dashboard", "dashboard_node.py")],
-                         ids=os.path.basename)
+@pytest.mark.parametrize(
+    "path",
+    [p for p in node_scripts() if os.path.basename(p) in NODES]
+    + [os.path.join(ROOT, "src", "dashboard", "dashboard", "dashboard_node.py")],
+    ids=os.path.basename,
+)
 def test_node_scripts_use_only_declared_relative_names(path):
     name = os.path.basename(path)
     node = NODES["dashboard" if name == "dashboard_node.py" else name]
@@ -99,8 +109,10 @@ def test_node_scripts_use_only_declared_relative_names(path):
 
 def test_no_absolute_names_in_the_source():
     """Names go through launch files: no rospy call in src/ names an absolute topic."""
-    pattern = re.compile(r"rospy\.(Publisher|Subscriber|Service|ServiceProxy|wait_for_service|wait_for_message)"
-                         r"\(\s*[\"']/")
+    pattern = re.compile(
+        r"rospy\.(Publisher|Subscriber|Service|ServiceProxy|wait_for_service|wait_for_message)"
+        r"\(\s*[\"']/"
+    )
     offenders = []
     for path in glob.glob(os.path.join(ROOT, "src", "**", "*"), recursive=True):
         if os.path.isfile(path) and (path.endswith(".py") or "/nodes/" in path):
@@ -116,6 +128,7 @@ def _config(package, name):
 
 def _device_params(module, cls):
     from motion_sensor.devices.device_interface import node_schema
+
     mod = __import__(f"motion_sensor.devices.{module}", fromlist=[cls])
     return node_schema(getattr(mod, cls))
 
@@ -124,6 +137,7 @@ def yaml_schema_pairs():
     from dashboard.config import DASHBOARD_PARAMETERS
     from motion_commander.config import TELEOP_PARAMETERS
     from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS
+
     return [
         (_config("motion_commander", "teleop.yaml"), TELEOP_PARAMETERS),
         (_config("motion_sensor", "sequencer.yaml"), SEQUENCER_PARAMS),
@@ -155,8 +169,9 @@ def test_shipped_yaml_holds_exactly_the_declared_defaults():
         defaults = schema.validate({}, path)
         for key in values:
             if _filled(schema.params[key], checked[key]) != _filled(schema.params[key], defaults[key]):
-                problems.append(f"{os.path.relpath(path, ROOT)}: {key} = {checked[key]!r}, declared default "
-                                f"{defaults[key]!r}")
+                problems.append(
+                    f"{os.path.relpath(path, ROOT)}: {key} = {checked[key]!r}, declared default {defaults[key]!r}"
+                )
     assert not problems, "\n".join(problems)
 
 
@@ -181,6 +196,7 @@ def test_python_api_gets_the_declared_defaults():
 def test_typed_configs_check_their_values_against_the_declaration():
     from motion_commander.teleop_core import SafetyConfig
     from motion_common.errors import ParameterError
+
     with pytest.raises(ParameterError, match="joint_speed_scale"):
         SafetyConfig(joint_speed_scale=2.0)
     with pytest.raises(ParameterError, match="singularity_slowdown"):

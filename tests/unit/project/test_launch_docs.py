@@ -1,6 +1,7 @@
 """Project rule: every <arg> of every launch file says what it is for (a non-empty doc=,
 which `roslaunch --ros-args FILE` prints). Also: the real kitting cell's launch switches the
 electromagnet on the output the cell YAML names."""
+
 import glob
 import os
 import xml.etree.ElementTree as ET
@@ -9,6 +10,7 @@ import pytest
 import yaml
 
 from ..conftest import ROOT
+
 LAUNCH_FILES = sorted(glob.glob(os.path.join(ROOT, "src", "motion_bringup", "launch", "*.launch")))
 
 
@@ -22,8 +24,9 @@ def test_every_arg_has_a_doc(path):
     # An <arg> inside <include> passes a value to the included file (documented there);
     # every other <arg> declares one of this file's arguments.
     passed = {id(arg) for include in root.iter("include") for arg in include.findall("arg")}
-    undocumented = [arg.get("name") for arg in root.iter("arg")
-                    if id(arg) not in passed and not (arg.get("doc") or "").strip()]
+    undocumented = [
+        arg.get("name") for arg in root.iter("arg") if id(arg) not in passed and not (arg.get("doc") or "").strip()
+    ]
     assert not undocumented, f"{os.path.basename(path)}: <arg> without a doc=: {undocumented}"
 
 

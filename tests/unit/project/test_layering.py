@@ -9,12 +9,14 @@ Generated messages and services (``<package>.msg``, ``<package>.srv``) may cross
 direction. Test doubles live in ``<package>.testing`` modules and are injected (by the
 driver registry's names), never imported by production code.
 """
+
 import ast
 import os
 
 import pytest
 
 from ..conftest import ROOT
+
 SRC = os.path.join(ROOT, "src")
 
 # package -> framework packages whose Python modules it may import.
@@ -37,8 +39,11 @@ NO_PYTHON = {"motion_bringup"}
 
 def framework_packages():
     """Every catkin package under src/ (a folder with a package.xml) that holds Python."""
-    return sorted(name for name in os.listdir(SRC) if os.path.isfile(os.path.join(SRC, name, "package.xml"))
-                  and name not in NO_PYTHON)
+    return sorted(
+        name
+        for name in os.listdir(SRC)
+        if os.path.isfile(os.path.join(SRC, name, "package.xml")) and name not in NO_PYTHON
+    )
 
 
 def test_bringup_holds_no_python():
@@ -80,7 +85,7 @@ def imported_modules(path):
                 yield node.module
                 continue
             base = module_parts(path)
-            base = base[:len(base) - (node.level - 1)] if node.level > 1 else base
+            base = base[: len(base) - (node.level - 1)] if node.level > 1 else base
             names = [node.module] if node.module else [alias.name for alias in node.names]
             for name in names:
                 yield ".".join(base + [name])

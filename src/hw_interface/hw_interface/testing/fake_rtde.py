@@ -20,6 +20,7 @@ and a UR session dry-run without a controller:
 Usage: ``FakeUR(urdf, initial_joints).classes()`` gives the three classes for
 URRtdeDriver. ``clock`` (seconds, monotonic) can be injected.
 """
+
 import collections
 import threading
 import time
@@ -28,7 +29,6 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from motion_common.kinematics import RobotKinematics
-
 from motion_common.params import Param, ParamSchema
 
 from ..ur_driver import URRtdeDriver, pose_to_ur
@@ -42,14 +42,14 @@ class _PathMotion:
     """A rest-to-rest motion along a path parametrised by s in [0, length]."""
 
     def __init__(self, kind, q_of_s, length, speed, acceleration, blocking):
-        self.kind = kind                  # "moveJ" or "moveL"
+        self.kind = kind  # "moveJ" or "moveL"
         self.q_of_s = q_of_s
         self.length = float(length)
         self.speed = float(speed)
         self.acceleration = float(acceleration)
         self.s = 0.0
         self.v = 0.0
-        self.stop_deceleration = None     # set by stopJ/stopL
+        self.stop_deceleration = None  # set by stopJ/stopL
         self.done = threading.Event()
         self.arrived = False
         self.blocking = blocking
@@ -78,8 +78,14 @@ class _PathMotion:
 class FakeUR:
     """The simulated controller shared by the three fake interfaces."""
 
-    def __init__(self, urdf_path: str, initial_joints=None, frequency: float = 500.0, clock=time.monotonic,
-                 tool_frame: str = "tool0"):
+    def __init__(
+        self,
+        urdf_path: str,
+        initial_joints=None,
+        frequency: float = 500.0,
+        clock=time.monotonic,
+        tool_frame: str = "tool0",
+    ):
         self.kinematics = RobotKinematics(urdf_path, tool_frame)
         self.q = np.zeros(self.kinematics.dof) if initial_joints is None else np.array(initial_joints, float)
         self.qd = np.zeros_like(self.q)
@@ -93,11 +99,11 @@ class FakeUR:
         self._protective_stopped = False
         self.connections = 0
         self.lock = threading.RLock()
-        self._motion = None               # a _PathMotion
-        self._servo_target = None         # np.ndarray while servoing
+        self._motion = None  # a _PathMotion
+        self._servo_target = None  # np.ndarray while servoing
         self._servo_lookahead = 0.1
         self._servo_stop_deceleration = None
-        self._progress = -1               # ur_rtde: <0 when no async operation runs
+        self._progress = -1  # ur_rtde: <0 when no async operation runs
         self._thread = None
         self.servo_targets = 0
 
@@ -238,8 +244,12 @@ class FakeUR:
             if not np.any(new_speed > 0):
                 self._servo_stop_deceleration = None
         self.qd = (self.q - previous) / dt
-        return (self._motion is not None or self._servo_target is not None
-                or self._servo_stop_deceleration is not None or bool(np.any(self.qd != 0.0)))
+        return (
+            self._motion is not None
+            or self._servo_target is not None
+            or self._servo_stop_deceleration is not None
+            or bool(np.any(self.qd != 0.0))
+        )
 
     def classes(self):
         """(control, receive, io) classes bound to this fake controller."""
@@ -416,19 +426,44 @@ class _FakeIO(_FakeInterface):
         return True
 
 
-def fake_ur_driver(urdf_path: str, tool_frame: str = "tool0", initial_joints=None, robot_ip: str = "",
-                   armed: bool = False, robot_name=None, **params) -> URRtdeDriver:
+def fake_ur_driver(
+    urdf_path: str,
+    tool_frame: str = "tool0",
+    initial_joints=None,
+    robot_ip: str = "",
+    armed: bool = False,
+    robot_name=None,
+    **params,
+) -> URRtdeDriver:
     """The ``ur_rtde_fake`` driver: URRtdeDriver on a FakeUR arm that starts at
     ``initial_joints`` (the robot's start pose), for dry runs of the UR path without a
     robot. ``robot_ip`` and ``armed`` are accepted and ignored: nothing real is reached.
     The fake is ``driver.fake``."""
     fake = FakeUR(urdf_path, initial_joints, params.get("frequency", 500.0), tool_frame=tool_frame)
-    driver = URRtdeDriver(urdf_path, tool_frame, robot_ip="fake-ur", armed=True, robot_name=robot_name,
-                          rtde_classes=fake.classes(), **params)
+    driver = URRtdeDriver(
+        urdf_path,
+        tool_frame,
+        robot_ip="fake-ur",
+        armed=True,
+        robot_name=robot_name,
+        rtde_classes=fake.classes(),
+        **params,
+    )
     driver.fake = fake
     return driver
 
 
-fake_ur_driver.PARAMETERS = URRtdeDriver.PARAMETERS.merged(ParamSchema([
-    Param("initial_joints", None, "rad", "start pose of the fake arm (motion_common/config/robots/<robot>.yaml)",
-          kind=list, nullable=True)]))
+fake_ur_driver.PARAMETERS = URRtdeDriver.PARAMETERS.merged(
+    ParamSchema(
+        [
+            Param(
+                "initial_joints",
+                None,
+                "rad",
+                "start pose of the fake arm (motion_common/config/robots/<robot>.yaml)",
+                kind=list,
+                nullable=True,
+            )
+        ]
+    )
+)

@@ -8,26 +8,31 @@ matching its step, all-zero, all-NaN or saturated depth, no or invalid CameraInf
 differing from the CameraInfo's) publishes nothing: it is counted as ``rejected`` and by
 reason (``rejected_<reason>``) on /diagnostics and warned about, and the node goes on.
 """
+
 import queue
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
-from motion_common.params import Param, ParamSchema
-
-from motion_sensor.devices.depth_hand import TRACKER_PARAMS, DepthHandTracker
-from motion_sensor.devices.camera_intrinsics import Intrinsics
-from motion_sensor.devices.depth_image import DepthImageError, decode_depth, intrinsics_from_camera_info
 from motion_common.interface import Topic
-
+from motion_common.params import Param, ParamSchema
+from motion_sensor.devices.camera_intrinsics import Intrinsics
+from motion_sensor.devices.depth_hand import TRACKER_PARAMS, DepthHandTracker
+from motion_sensor.devices.depth_image import DepthImageError, decode_depth, intrinsics_from_camera_info
 from motion_sensor.devices.device import HandDevice, empty_sample
 from motion_sensor.hand_sample import HandSample
 
-IMAGE_CHECK_PARAMS = ParamSchema([
-    Param("min_valid_fraction", 0.01, low=0, high=1,
-          doc="an image with fewer measured pixels than this fraction is rejected (lens covered, all NaN)"),
-])
+IMAGE_CHECK_PARAMS = ParamSchema(
+    [
+        Param(
+            "min_valid_fraction",
+            0.01,
+            low=0,
+            high=1,
+            doc="an image with fewer measured pixels than this fraction is rejected (lens covered, all NaN)",
+        ),
+    ]
+)
 
 
 @dataclass
@@ -46,7 +51,7 @@ class DepthMessage:
 class DepthHandDevice(HandDevice):
     """Base of the depth devices: a tracker and the image -> HandSample step."""
 
-    default_frame_id = "camera_depth_frame"   # REP 103 body frame of the depth camera (openni naming)
+    default_frame_id = "camera_depth_frame"  # REP 103 body frame of the depth camera (openni naming)
 
     def __init__(self, config: dict, **kw):
         super().__init__(config, **kw)
@@ -65,9 +70,17 @@ class DepthHandDevice(HandDevice):
         if hand is None:
             self.counters["no_hand"] += 1
             return empty_sample(stamp, self.frame_id, self.name)
-        return HandSample(stamp=stamp, position=hand.position, orientation=hand.orientation,
-                          hands_num=hand.hands_num, hand_types=hand.hand_types, frame_id=self.frame_id,
-                          hand_id=hand.hand_id, device=self.name, grab_strength=hand.grab_strength)
+        return HandSample(
+            stamp=stamp,
+            position=hand.position,
+            orientation=hand.orientation,
+            hands_num=hand.hands_num,
+            hand_types=hand.hand_types,
+            frame_id=self.frame_id,
+            hand_id=hand.hand_id,
+            device=self.name,
+            grab_strength=hand.grab_strength,
+        )
 
 
 class DepthTopicDevice(DepthHandDevice):
@@ -80,16 +93,22 @@ class DepthTopicDevice(DepthHandDevice):
 
     name = "depth"
     # The node subscribes these (launch files remap them to the camera's topics).
-    subscribes = (Topic("camera/depth/image_raw", "sensor_msgs/Image", "depth image, 16UC1 (mm) or 32FC1 (m)"),
-                  Topic("camera/depth/camera_info", "sensor_msgs/CameraInfo", "intrinsics of that image"))
-    params = TRACKER_PARAMS.merged(IMAGE_CHECK_PARAMS).merged(ParamSchema([
-        Param("wait_s", 0.2, unit="s", low=0, low_open=True, doc="read() returns empty-handed after this long"),
-    ]))
+    subscribes = (
+        Topic("camera/depth/image_raw", "sensor_msgs/Image", "depth image, 16UC1 (mm) or 32FC1 (m)"),
+        Topic("camera/depth/camera_info", "sensor_msgs/CameraInfo", "intrinsics of that image"),
+    )
+    params = TRACKER_PARAMS.merged(IMAGE_CHECK_PARAMS).merged(
+        ParamSchema(
+            [
+                Param("wait_s", 0.2, unit="s", low=0, low_open=True, doc="read() returns empty-handed after this long"),
+            ]
+        )
+    )
 
     def __init__(self, config: dict, **kw):
         super().__init__(config, **kw)
-        self.images: "queue.Queue[DepthMessage]" = queue.Queue(maxsize=2)
-        self.intrinsics: Optional[Intrinsics] = None
+        self.images: queue.Queue[DepthMessage] = queue.Queue(maxsize=2)
+        self.intrinsics: Intrinsics | None = None
         # Why there are no intrinsics: the counter key and the message.
         self.info_reason, self.info_problem = "no_camera_info", "no CameraInfo received yet"
 
@@ -121,28 +140,38 @@ class DepthTopicDevice(DepthHandDevice):
     def open(self) -> None:
         self.tracker.reset()
 
-    def read(self, now: float) -> Optional[HandSample]:
+    def read(self, now: float) -> HandSample | None:
         try:
             message = self.images.get(timeout=self.config["wait_s"])
         except queue.Empty:
             return None
         return self.process(message)
 
-    def process(self, message: DepthMessage) -> Optional[HandSample]:
+    def process(self, message: DepthMessage) -> HandSample | None:
         """The HandSample of one image message, or None when it is rejected (counted)."""
         intrinsics = self.intrinsics
         if intrinsics is None:
             self.reject(self.info_reason, self.info_problem + " (on camera/depth/camera_info)")
             return None
         try:
-            depth = decode_depth(message.encoding, message.width, message.height, message.step, message.data,
-                                 message.is_bigendian, self.config["min_valid_fraction"])
+            depth = decode_depth(
+                message.encoding,
+                message.width,
+                message.height,
+                message.step,
+                message.data,
+                message.is_bigendian,
+                self.config["min_valid_fraction"],
+            )
         except DepthImageError as exc:
             self.reject(exc.reason, str(exc))
             return None
         if (message.width, message.height) != (intrinsics.width, intrinsics.height):
-            self.reject("camera_info_size", f"image {message.width}x{message.height} but CameraInfo "
-                                            f"{intrinsics.width}x{intrinsics.height}: mismatched topics?")
+            self.reject(
+                "camera_info_size",
+                f"image {message.width}x{message.height} but CameraInfo "
+                f"{intrinsics.width}x{intrinsics.height}: mismatched topics?",
+            )
             return None
         return self.hand_sample(depth, intrinsics, message.stamp)
 

@@ -30,48 +30,76 @@ Positions and orientations come out in the camera's REP 103 body frame (x forwar
 the optical axis, y left, z up), as hand.msg wants; the hand frame is hand.msg's (x along
 the fingers, z out of the back of the hand).
 """
+
 from dataclasses import dataclass
-from typing import Optional, Tuple
 
 import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from motion_common.params import Param, ParamSchema
-
 from motion_sensor.devices.camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
 from motion_sensor.errors import MotionSensorError
 
-TRACKER_PARAMS = ParamSchema([
-    Param("min_depth_m", 0.35, unit="m", low=0.05, doc="working volume: nearest depth along the optical axis"),
-    Param("max_depth_m", 1.3, unit="m", low=0.1, doc="working volume: farthest depth along the optical axis"),
-    Param("max_lateral_m", 0.6, unit="m", low=0.05, doc="working volume: half width and half height around the axis"),
-    Param("band_depth_m", 0.25, unit="m", low=0.02, doc="blob pixels lie at most this far behind the nearest one"),
-    Param("min_blob_area_m2", 0.003, unit="m^2", low=0, doc="a smaller blob is noise, not a hand"),
-    Param("max_blob_area_m2", 0.06, unit="m^2", low=0, low_open=True,
-          doc="a larger blob is the body or furniture, not a hand with its forearm"),
-    Param("palm_search_depth_m", 0.12, unit="m", low=0.01, doc="palm centre searched this deep behind the blob's front"),
-    Param("ridge_px", 1.0, unit="px", low=0, doc="distance-transform ridge width averaged into the palm centre"),
-    Param("hand_radius_m", 0.1, unit="m", low=0.03, doc="points this close to the palm centre are the hand"),
-    Param("palm_faces_camera", True, doc="the palm faces the camera (z, out of the back of the hand, points away)"),
-    Param("hand_type", "right", choices=("right", "left", "by_position"),
-          doc="hand_type of the primary hand: fixed, or by its side of the camera (+y: right)"),
-    Param("max_hands", 2, low=1, high=2, doc="hands reported; 2 lets the gesture clutch see a second hand"),
-    Param("open_extent_m", 0.115, unit="m", low=0, low_open=True, doc="fingertip reach beyond the palm centre, open hand"),
-    Param("fist_extent_m", 0.065, unit="m", low=0, low_open=True, doc="the same reach with a fist"),
-    Param("jump_m", 0.15, unit="m", low=0, low_open=True, doc="a palm moving further between frames is a new hand id"),
-])
+TRACKER_PARAMS = ParamSchema(
+    [
+        Param("min_depth_m", 0.35, unit="m", low=0.05, doc="working volume: nearest depth along the optical axis"),
+        Param("max_depth_m", 1.3, unit="m", low=0.1, doc="working volume: farthest depth along the optical axis"),
+        Param(
+            "max_lateral_m", 0.6, unit="m", low=0.05, doc="working volume: half width and half height around the axis"
+        ),
+        Param("band_depth_m", 0.25, unit="m", low=0.02, doc="blob pixels lie at most this far behind the nearest one"),
+        Param("min_blob_area_m2", 0.003, unit="m^2", low=0, doc="a smaller blob is noise, not a hand"),
+        Param(
+            "max_blob_area_m2",
+            0.06,
+            unit="m^2",
+            low=0,
+            low_open=True,
+            doc="a larger blob is the body or furniture, not a hand with its forearm",
+        ),
+        Param(
+            "palm_search_depth_m",
+            0.12,
+            unit="m",
+            low=0.01,
+            doc="palm centre searched this deep behind the blob's front",
+        ),
+        Param("ridge_px", 1.0, unit="px", low=0, doc="distance-transform ridge width averaged into the palm centre"),
+        Param("hand_radius_m", 0.1, unit="m", low=0.03, doc="points this close to the palm centre are the hand"),
+        Param("palm_faces_camera", True, doc="the palm faces the camera (z, out of the back of the hand, points away)"),
+        Param(
+            "hand_type",
+            "right",
+            choices=("right", "left", "by_position"),
+            doc="hand_type of the primary hand: fixed, or by its side of the camera (+y: right)",
+        ),
+        Param("max_hands", 2, low=1, high=2, doc="hands reported; 2 lets the gesture clutch see a second hand"),
+        Param(
+            "open_extent_m",
+            0.115,
+            unit="m",
+            low=0,
+            low_open=True,
+            doc="fingertip reach beyond the palm centre, open hand",
+        ),
+        Param("fist_extent_m", 0.065, unit="m", low=0, low_open=True, doc="the same reach with a fist"),
+        Param(
+            "jump_m", 0.15, unit="m", low=0, low_open=True, doc="a palm moving further between frames is a new hand id"
+        ),
+    ]
+)
 
-OPTICAL_TO_BODY = OPTICAL_TO_REP103   # the name the depth tests and bench use
+OPTICAL_TO_BODY = OPTICAL_TO_REP103  # the name the depth tests and bench use
 
 
 @dataclass
 class DepthHand:
     """One tracking result: the primary hand (REP 103 camera frame) and what else was seen."""
 
-    position: np.ndarray                 # seen palm surface (m)
-    orientation: np.ndarray              # unit quaternion (x, y, z, w)
-    hand_types: Tuple[str, ...]          # one per hand seen, primary first
+    position: np.ndarray  # seen palm surface (m)
+    orientation: np.ndarray  # unit quaternion (x, y, z, w)
+    hand_types: tuple[str, ...]  # one per hand seen, primary first
     hand_id: int
     grab_strength: float
 
@@ -87,12 +115,17 @@ class DepthHandTracker:
     def __init__(self, config: dict):
         self.config = dict(TRACKER_PARAMS.defaults(), **{k: v for k, v in config.items() if k in TRACKER_PARAMS.params})
         c = self.config
-        if c["min_depth_m"] >= c["max_depth_m"] or c["min_blob_area_m2"] >= c["max_blob_area_m2"] \
-                or c["fist_extent_m"] >= c["open_extent_m"]:
-            raise MotionSensorError("depth hand: need min_depth_m < max_depth_m, min_blob_area_m2 < "
-                                    "max_blob_area_m2 and fist_extent_m < open_extent_m")
+        if (
+            c["min_depth_m"] >= c["max_depth_m"]
+            or c["min_blob_area_m2"] >= c["max_blob_area_m2"]
+            or c["fist_extent_m"] >= c["open_extent_m"]
+        ):
+            raise MotionSensorError(
+                "depth hand: need min_depth_m < max_depth_m, min_blob_area_m2 < "
+                "max_blob_area_m2 and fist_extent_m < open_extent_m"
+            )
         self._ray_cache = None
-        self._last_axis = None           # fingers direction (optical) of the previous frame
+        self._last_axis = None  # fingers direction (optical) of the previous frame
         self._last_position = None
         self._hand_id = 0
         self.last_reason = ""
@@ -110,7 +143,7 @@ class DepthHandTracker:
             self._ray_cache = (key, xs, ys)
         return self._ray_cache[1], self._ray_cache[2]
 
-    def track(self, depth: np.ndarray, intr: Intrinsics) -> Optional[DepthHand]:
+    def track(self, depth: np.ndarray, intr: Intrinsics) -> DepthHand | None:
         """The hand in ``depth`` (m, 0 = none, shape (height, width) of ``intr``), or None
         when there is none (``last_reason`` says why)."""
         c = self.config
@@ -139,8 +172,13 @@ class DepthHandTracker:
         rotation = OPTICAL_TO_BODY @ rotation_opt
         quaternion = Rotation.from_matrix(rotation).as_quat()
         self.last_reason = ""
-        return DepthHand(position=position, orientation=quaternion, hand_types=tuple(types), hand_id=self._hand_id,
-                         grab_strength=grab)
+        return DepthHand(
+            position=position,
+            orientation=quaternion,
+            hand_types=tuple(types),
+            hand_id=self._hand_id,
+            grab_strength=grab,
+        )
 
     def _lost(self):
         self._last_position = None
@@ -149,7 +187,7 @@ class DepthHandTracker:
         mode = self.config["hand_type"]
         if mode != "by_position":
             return mode
-        return "right" if position_opt[0] < 0 else "left"   # optical x < 0 is the camera's left (+y)
+        return "right" if position_opt[0] < 0 else "left"  # optical x < 0 is the camera's left (+y)
 
     def _blobs(self, depth, intr, xs, ys):
         """(labels, stats, [(label, mean depth, mean optical x)] nearest first) or None."""
@@ -163,7 +201,7 @@ class DepthHandTracker:
         if sample.size < 4:
             self.last_reason = "nothing in the working volume"
             return None
-        near = float(np.partition(sample, 3)[3])     # the 4th nearest: one flying pixel is not the front
+        near = float(np.partition(sample, 3)[3])  # the 4th nearest: one flying pixel is not the front
         mask = inside & (depth < near + c["band_depth_m"])
         mask[:, :u0] = False
         mask[:, u1:] = False
@@ -182,11 +220,13 @@ class DepthHandTracker:
         for label in keep:
             # Per-blob sums inside its bounding box: a few blobs, not the whole image.
             left, top = stats[label, cv2.CC_STAT_LEFT], stats[label, cv2.CC_STAT_TOP]
-            box = (slice(top, top + stats[label, cv2.CC_STAT_HEIGHT]),
-                   slice(left, left + stats[label, cv2.CC_STAT_WIDTH]))
+            box = (
+                slice(top, top + stats[label, cv2.CC_STAT_HEIGHT]),
+                slice(left, left + stats[label, cv2.CC_STAT_WIDTH]),
+            )
             rows, cols = np.nonzero(labels[box] == label)
             z = depth[box][rows, cols]
-            area = float(z @ z) / (intr.fx * intr.fy)   # each pixel covers (z/fx)(z/fy) m^2
+            area = float(z @ z) / (intr.fx * intr.fy)  # each pixel covers (z/fx)(z/fy) m^2
             mean_z = float(z.mean())
             x = float(xs[cols + left] @ z) / z.size
             y = float(ys[rows + top] @ z) / z.size
@@ -197,8 +237,11 @@ class DepthHandTracker:
             elif area >= c["min_blob_area_m2"]:
                 candidates.append((int(label), mean_z, x))
         if not candidates:
-            self.last_reason = ("the nearest blob is larger than a hand (the body or furniture?)" if too_big
-                                else "only blobs smaller than a hand")
+            self.last_reason = (
+                "the nearest blob is larger than a hand (the body or furniture?)"
+                if too_big
+                else "only blobs smaller than a hand"
+            )
             return None
         candidates.sort(key=lambda item: item[1])
         return labels, stats, candidates
@@ -226,7 +269,7 @@ class DepthHandTracker:
         # Depth of the palm surface: median over a disc of half the inscribed radius.
         r = max(1, int(peak * 0.5))
         vi, ui = int(round(v)) - t0, int(round(u)) - l0
-        patch = z[max(vi - r, 0):vi + r + 1, max(ui - r, 0):ui + r + 1]
+        patch = z[max(vi - r, 0) : vi + r + 1, max(ui - r, 0) : ui + r + 1]
         patch = patch[patch > 0]
         if patch.size == 0:
             self.last_reason = "no depth at the palm centre"
@@ -241,25 +284,25 @@ class DepthHandTracker:
         offsets = pts - centre
         dist3 = np.einsum("ij,ij->i", offsets, offsets)
         palm_r = peak * zc / intr.fx
-        palm = offsets[dist3 <= (0.6 * palm_r) ** 2]   # the palm's middle: clear of the thicker wrist
+        palm = offsets[dist3 <= (0.6 * palm_r) ** 2]  # the palm's middle: clear of the thicker wrist
         near = offsets[dist3 <= c["hand_radius_m"] ** 2]
         if len(palm) < 6 or len(near) < 10:
             self.last_reason = "too few points for the hand axes"
             return None
         normal = np.linalg.eigh(np.cov(palm.T))[1][:, 0]
         if (normal[2] < 0) == c["palm_faces_camera"]:
-            normal = -normal   # z out of the back of the hand: away from the camera when the palm faces it
+            normal = -normal  # z out of the back of the hand: away from the camera when the palm faces it
         axis = np.linalg.eigh(np.cov(near.T))[1][:, 2]
         axis = axis - normal * float(axis @ normal)
         axis /= np.linalg.norm(axis)
-        far = offsets[dist3 > (1.4 * c["hand_radius_m"]) ** 2]   # beyond the fingertips: the forearm
+        far = offsets[dist3 > (1.4 * c["hand_radius_m"]) ** 2]  # beyond the fingertips: the forearm
         if len(far) >= 10:
-            if float(far.mean(axis=0) @ axis) > 0:   # the forearm is behind the fingers
+            if float(far.mean(axis=0) @ axis) > 0:  # the forearm is behind the fingers
                 axis = -axis
         elif self._last_axis is not None:
             if float(axis @ self._last_axis) < 0:
                 axis = -axis
-        elif axis[1] > 0:   # no forearm, no history: fingers up in the image
+        elif axis[1] > 0:  # no forearm, no history: fingers up in the image
             axis = -axis
         self._last_axis = axis
         rotation = np.column_stack((axis, np.cross(normal, axis), normal))

@@ -8,13 +8,13 @@ sensor_msgs/CameraInfo (checked by ``motion_common.camera_model``). Anything unu
 raises ``DepthImageError`` whose ``reason`` is a short key the device counts on
 /diagnostics (``rejected_<reason>``).
 """
-from typing import Sequence
+
+from collections.abc import Sequence
 
 import numpy as np
 
 from motion_common.camera_model import CameraInfoError, Intrinsics
 from motion_common.camera_model import intrinsics_from_camera_info as _intrinsics_from_camera_info
-
 from motion_sensor.errors import MotionSensorError
 
 #: Depths beyond this are no measurement (m): no depth camera sees further.
@@ -42,8 +42,15 @@ def intrinsics_from_camera_info(k: Sequence[float], width: int, height: int) -> 
 _ENCODINGS = {"16UC1": (np.uint16, 2, 0.001), "mono16": (np.uint16, 2, 0.001), "32FC1": (np.float32, 4, 1.0)}
 
 
-def decode_depth(encoding: str, width: int, height: int, step: int, data, is_bigendian: bool = False,
-                 min_valid_fraction: float = 0.001) -> np.ndarray:
+def decode_depth(
+    encoding: str,
+    width: int,
+    height: int,
+    step: int,
+    data,
+    is_bigendian: bool = False,
+    min_valid_fraction: float = 0.001,
+) -> np.ndarray:
     """Metres, float32 (height, width), 0 where there is no measurement.
 
     Raises DepthImageError with reason ``encoding`` (not 16UC1/32FC1), ``size`` (step or
@@ -52,8 +59,11 @@ def decode_depth(encoding: str, width: int, height: int, step: int, data, is_big
     at the encoding's maximum or beyond range).
     """
     if encoding not in _ENCODINGS:
-        raise DepthImageError("encoding", f"depth encoding {encoding!r} is not 16UC1 (mm) or 32FC1 (m); "
-                                          "point the driver at the depth image topic, not the colour one")
+        raise DepthImageError(
+            "encoding",
+            f"depth encoding {encoding!r} is not 16UC1 (mm) or 32FC1 (m); "
+            "point the driver at the depth image topic, not the colour one",
+        )
     dtype, size, scale = _ENCODINGS[encoding]
     if width <= 0 or height <= 0 or step < width * size:
         raise DepthImageError("size", f"depth image {width}x{height} with step {step} (need >= {width * size})")
@@ -75,10 +85,16 @@ def decode_depth(encoding: str, width: int, height: int, step: int, data, is_big
     valid = np.count_nonzero(depth)
     if valid < min_valid_fraction * depth.size:
         if np.count_nonzero(saturated) > 0.5 * depth.size:
-            raise DepthImageError("saturated_depth", f"depth image saturated: {np.count_nonzero(saturated)} of "
-                                                     f"{depth.size} pixels at the maximum; too close or blinded")
-        raise DepthImageError("empty_depth", f"depth image has {valid} measured pixels of {depth.size} "
-                                             "(all zero or NaN): lens covered or the camera not streaming")
+            raise DepthImageError(
+                "saturated_depth",
+                f"depth image saturated: {np.count_nonzero(saturated)} of "
+                f"{depth.size} pixels at the maximum; too close or blinded",
+            )
+        raise DepthImageError(
+            "empty_depth",
+            f"depth image has {valid} measured pixels of {depth.size} "
+            "(all zero or NaN): lens covered or the camera not streaming",
+        )
     return depth
 
 

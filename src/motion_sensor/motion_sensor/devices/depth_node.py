@@ -3,11 +3,10 @@
 CameraInfo subscribers that feed it; for the Kinect, the choice between the device and a
 fakenect dump (``~fakenect_dump``) made before the wrapper is built.
 """
+
 import rospy
 
 from motion_common.ros_interface import subscriber
-from sensor_msgs.msg import CameraInfo, Image
-
 from motion_sensor.devices.depth_device import DepthMessage, DepthTopicDevice
 from motion_sensor.devices.device_node import DeviceNode, spin_device_node
 from motion_sensor.devices.kinect import FakenectKinectDevice, KinectDevice
@@ -23,14 +22,21 @@ def run_depth_node(node_name: str = "depth_hand_driver") -> None:
         device.feed_info(msg.K, msg.width, msg.height)
 
     def on_image(msg):
-        device.feed_image(DepthMessage(stamp=msg.header.stamp.to_sec(), encoding=msg.encoding, width=msg.width,
-                                       height=msg.height, step=msg.step, data=msg.data,
-                                       is_bigendian=bool(msg.is_bigendian)))
+        device.feed_image(
+            DepthMessage(
+                stamp=msg.header.stamp.to_sec(),
+                encoding=msg.encoding,
+                width=msg.width,
+                height=msg.height,
+                step=msg.step,
+                data=msg.data,
+                is_bigendian=bool(msg.is_bigendian),
+            )
+        )
 
     subscriber(node.interface, "camera/depth/camera_info", on_info, queue_size=1)
     # A 640x480 16UC1 image is 600 kB: a large buffer keeps rospy from queueing stale ones.
-    subscriber(node.interface, "camera/depth/image_raw", on_image, queue_size=2, buff_size=1 << 24,
-               tcp_nodelay=True)
+    subscriber(node.interface, "camera/depth/image_raw", on_image, queue_size=2, buff_size=1 << 24, tcp_nodelay=True)
     spin_device_node(node)
 
 

@@ -21,33 +21,36 @@ it opens, reads (at ``rate_hz`` or as samples come), checks each sample (``sampl
 and publishes it, and reconnects with backoff. Its clock and sleep are injected, so unit
 tests run it on a fake clock without sleeping.
 """
+
 import abc
 import logging
 import math
 import time
 from collections import Counter
-from typing import Callable, Dict, Iterable, Optional, Tuple
+from collections.abc import Callable, Iterable
 
 import numpy as np
 
 from motion_common.params import Param, ParamSchema
 from motion_common.rotations import is_unit_quaternion
-
 from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
 from motion_sensor.hand_sample import HandSample
 
 _LOG = logging.getLogger("motion_sensor.devices.device")
 
 
-
 #: A device that sees both hands follows only this one when set: the two devices of a
 #: bimanual session each take one hand of the same stream, and neither ever falls over
 #: to the other hand when its own leaves the view.
-HAND_TYPE_PARAM = Param("hand_type", "", choices=("", "left", "right"),
-                        doc="follow only this hand (empty: primary_hand picks, falling back to the other)")
+HAND_TYPE_PARAM = Param(
+    "hand_type",
+    "",
+    choices=("", "left", "right"),
+    doc="follow only this hand (empty: primary_hand picks, falling back to the other)",
+)
 
 
-def hand_preference(config: dict) -> Tuple[str, bool]:
+def hand_preference(config: dict) -> tuple[str, bool]:
     """(preferred hand type, strict) of a device config with ``primary_hand`` and
     ``hand_type``: a set ``hand_type`` wins and is strict."""
     if config.get("hand_type"):
@@ -78,9 +81,14 @@ class Backoff:
 RETRYABLE = (OSError, DeviceUnavailable)
 
 
-def reconnect_loop(session: Callable[[], None], stopped: Callable[[], bool], backoff: Backoff,
-                   wait: Callable[[float], object], on_error: Callable[[BaseException, float], None],
-                   retry: Tuple[type, ...] = RETRYABLE) -> None:
+def reconnect_loop(
+    session: Callable[[], None],
+    stopped: Callable[[], bool],
+    backoff: Backoff,
+    wait: Callable[[float], object],
+    on_error: Callable[[BaseException, float], None],
+    retry: tuple[type, ...] = RETRYABLE,
+) -> None:
     """Run ``session()`` until ``stopped()``; after a retryable error call
     ``on_error(exc, delay)`` and ``wait(delay)`` with the next backoff delay. The session
     resets the backoff itself once it is connected. A session that returns ends the loop."""
@@ -96,7 +104,7 @@ def reconnect_loop(session: Callable[[], None], stopped: Callable[[], bool], bac
             wait(delay)
 
 
-def sample_problem(sample: HandSample) -> Optional[str]:
+def sample_problem(sample: HandSample) -> str | None:
     """Why a sample must not be published, or None when it is good.
 
     A frame without a hand (hands_num 0) is good whatever its pose: it tells the sequencer
@@ -122,8 +130,15 @@ def sample_problem(sample: HandSample) -> Optional[str]:
 
 def empty_sample(stamp: float, frame_id: str, device: str = "") -> HandSample:
     """A frame without a hand (hands_num 0): the hand left or none is in view."""
-    return HandSample(stamp=stamp, position=np.zeros(3), orientation=np.zeros(4), hands_num=0, hand_types=(),
-                      frame_id=frame_id, device=device)
+    return HandSample(
+        stamp=stamp,
+        position=np.zeros(3),
+        orientation=np.zeros(4),
+        hands_num=0,
+        hand_types=(),
+        frame_id=frame_id,
+        device=device,
+    )
 
 
 class HandDevice(abc.ABC):
@@ -137,20 +152,21 @@ class HandDevice(abc.ABC):
 
     name: str = "device"
     params: ParamSchema = ParamSchema([])
-    rate_hz: Optional[float] = None
-    finite: bool = False            # True: a recording that ends (the node then reports ~finished and exits)
+    rate_hz: float | None = None
+    finite: bool = False  # True: a recording that ends (the node then reports ~finished and exits)
     # True: the wrapper stamps each message as it publishes it. A recording has no moment of
     # reception, so its frames are stamped where a live driver's would start their way
     # through the framework: at the publish (the same point the transport floor starts at).
     stamp_on_publish: bool = False
     default_frame_id: str = "device"
-    wrapper_defaults: Dict[str, object] = {}   # the device's defaults for wrapper parameters
+    wrapper_defaults: dict[str, object] = {}  # the device's defaults for wrapper parameters
     # Extra latched std_msgs/Bool outputs: key -> topic; the device calls emit(key, value).
-    bool_outputs: Dict[str, str] = {}
-    subscribes: tuple = ()   # motion_common.interface.Topic entries the node feeds the device from
+    bool_outputs: dict[str, str] = {}
+    subscribes: tuple = ()  # motion_common.interface.Topic entries the node feeds the device from
 
-    def __init__(self, config: dict, clock: Callable[[], float] = time.time,
-                 sleep: Callable[[float], object] = time.sleep):
+    def __init__(
+        self, config: dict, clock: Callable[[], float] = time.time, sleep: Callable[[float], object] = time.sleep
+    ):
         self.config = dict(config)
         self.frame_id = self.config.get("frame_id") or self.default_frame_id
         self.clock = clock
@@ -159,14 +175,14 @@ class HandDevice(abc.ABC):
         self.connected = False
         self.info: Callable[[str], None] = _LOG.info
         self.warn: Callable[[str], None] = _LOG.warning
-        self.emitted = []       # (key, bool) events not yet published, drained by the wrapper
+        self.emitted = []  # (key, bool) events not yet published, drained by the wrapper
 
     @abc.abstractmethod
     def open(self) -> None:
         """Connect to the device (or load the recording)."""
 
     @abc.abstractmethod
-    def read(self, now: float) -> Optional[HandSample]:
+    def read(self, now: float) -> HandSample | None:
         """The next sample, or None when there is nothing to publish now."""
 
     @abc.abstractmethod
@@ -196,9 +212,16 @@ class DeviceRunner:
     reached its end, False when stopped.
     """
 
-    def __init__(self, device: HandDevice, publish: Callable[[HandSample], None], stopped: Callable[[], bool],
-                 backoff: Backoff = None, clock: Callable[[], float] = None, sleep: Callable[[float], object] = None,
-                 publish_bool: Callable[[str, bool], None] = None):
+    def __init__(
+        self,
+        device: HandDevice,
+        publish: Callable[[HandSample], None],
+        stopped: Callable[[], bool],
+        backoff: Backoff = None,
+        clock: Callable[[], float] = None,
+        sleep: Callable[[float], object] = None,
+        publish_bool: Callable[[str, bool], None] = None,
+    ):
         self.device = device
         self.publish = publish
         self.publish_bool = publish_bool or (lambda key, value: None)
@@ -213,8 +236,9 @@ class DeviceRunner:
     def run(self) -> bool:
         """Stream until stopped or, for a finite device, to its end."""
         try:
-            reconnect_loop(self._session, lambda: self.stopped() or self.finished, self.backoff, self.sleep,
-                           self._on_error)
+            reconnect_loop(
+                self._session, lambda: self.stopped() or self.finished, self.backoff, self.sleep, self._on_error
+            )
         finally:
             self.device.connected = False
         return self.finished
@@ -252,7 +276,7 @@ class DeviceRunner:
                     return
             self.step(self.device.read(self.clock()))
 
-    def step(self, sample: Optional[HandSample]) -> bool:
+    def step(self, sample: HandSample | None) -> bool:
         """Check and publish one sample (and the device's emitted values); True if published."""
         while self.device.emitted:
             self.publish_bool(*self.device.emitted.pop(0))
@@ -268,9 +292,15 @@ class DeviceRunner:
         return True
 
 
-def wait_until_ready(conditions: Iterable[Tuple[str, Callable[[], bool]]], stopped: Callable[[], bool],
-                     clock: Callable[[], float], sleep: Callable[[float], object], log: Callable[[str], None],
-                     poll_s: float = 0.05, log_every_s: float = 5.0) -> bool:
+def wait_until_ready(
+    conditions: Iterable[tuple[str, Callable[[], bool]]],
+    stopped: Callable[[], bool],
+    clock: Callable[[], float],
+    sleep: Callable[[float], object],
+    log: Callable[[str], None],
+    poll_s: float = 0.05,
+    log_every_s: float = 5.0,
+) -> bool:
     """Wait until every ``(description, predicate)`` holds; log what is awaited at the start
     and every ``log_every_s``. True when ready, False if ``stopped()`` first."""
     conditions = list(conditions)

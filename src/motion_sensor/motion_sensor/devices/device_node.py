@@ -15,6 +15,7 @@ a DeviceRunner (reconnect with backoff, bad samples dropped and counted), publis
 ``diagnostics``, and for a finite device a latched ``~finished`` (False at start, True at
 the end, then the node exits).
 """
+
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from std_msgs.msg import Bool
@@ -22,11 +23,11 @@ from std_msgs.msg import Bool
 from motion_common.errors import ParameterError
 from motion_common.ros_interface import load_params, publisher, subscriber
 from motion_common.startup_heap import freeze_startup_heap
-
-from motion_sensor.devices.device_interface import WRAPPER_PARAMS, device_interface, node_schema  # noqa: F401 (re-export)
 from motion_sensor.devices.device import Backoff, DeviceRunner, HandDevice, wait_until_ready
+from motion_sensor.devices.device_interface import WRAPPER_PARAMS, device_interface, node_schema  # noqa: F401 (re-export)
 from motion_sensor.errors import MotionSensorError
 from motion_sensor.ros_conversions import sample_to_msg
+
 
 class DeviceNode:
     """ROS wiring of one HandDevice through a DeviceRunner."""
@@ -45,10 +46,12 @@ class DeviceNode:
         # queue_size None is rospy's synchronous publish: the device thread does the socket
         # write itself. Hand frames are small and the device thread has nothing else to do,
         # so the queue's thread hand-off would only add latency.
-        self.publisher = publisher(self.interface, "motion_sensor/raw_hand",
-                                   queue_size=self.config["queue_size"] or None, tcp_nodelay=True)
-        self.bool_pubs = {key: publisher(self.interface, topic, queue_size=1)
-                          for key, topic in device_cls.bool_outputs.items()}
+        self.publisher = publisher(
+            self.interface, "motion_sensor/raw_hand", queue_size=self.config["queue_size"] or None, tcp_nodelay=True
+        )
+        self.bool_pubs = {
+            key: publisher(self.interface, topic, queue_size=1) for key, topic in device_cls.bool_outputs.items()
+        }
         self.finished_pub = None
         if device_cls.finite:
             self.finished_pub = publisher(self.interface, "~finished", queue_size=1)
@@ -58,10 +61,18 @@ class DeviceNode:
         self.state = "starting"
         if self.config["wait_for_ready"]:
             self.ready_sub = subscriber(self.interface, "session_ready", self._on_ready, queue_size=1)
-        backoff = Backoff(self.config["backoff_initial_s"], self.config["backoff_factor"],
-                          max(self.config["backoff_max_s"], self.config["backoff_initial_s"]))
-        self.runner = DeviceRunner(self.device, self._publish, rospy.is_shutdown, backoff,
-                                   publish_bool=lambda key, value: self.bool_pubs[key].publish(Bool(value)))
+        backoff = Backoff(
+            self.config["backoff_initial_s"],
+            self.config["backoff_factor"],
+            max(self.config["backoff_max_s"], self.config["backoff_initial_s"]),
+        )
+        self.runner = DeviceRunner(
+            self.device,
+            self._publish,
+            rospy.is_shutdown,
+            backoff,
+            publish_bool=lambda key, value: self.bool_pubs[key].publish(Bool(value)),
+        )
         rospy.Timer(rospy.Duration(self.config["diagnostics_period_s"]), self.publish_diagnostics)
         rospy.on_shutdown(self.device.stop)
 
@@ -80,11 +91,20 @@ class DeviceNode:
             conditions.append((f"True on {self.ready_sub.resolved_name}", lambda: self.ready))
         wanted = self.config["min_subscribers"]
         if wanted > 0:
-            conditions.append((f"{wanted} subscriber(s) of {self.publisher.resolved_name}",
-                               lambda: self.publisher.get_num_connections() >= wanted))
+            conditions.append(
+                (
+                    f"{wanted} subscriber(s) of {self.publisher.resolved_name}",
+                    lambda: self.publisher.get_num_connections() >= wanted,
+                )
+            )
         self.state = "waiting for the session to be ready"
-        ready = wait_until_ready(conditions, rospy.is_shutdown, rospy.get_time, rospy.sleep,
-                                 lambda text: rospy.loginfo("%s: %s", self.node_name, text))
+        ready = wait_until_ready(
+            conditions,
+            rospy.is_shutdown,
+            rospy.get_time,
+            rospy.sleep,
+            lambda text: rospy.loginfo("%s: %s", self.node_name, text),
+        )
         if ready and self.config["start_delay"] > 0:
             rospy.sleep(self.config["start_delay"])
         return ready and not rospy.is_shutdown()
@@ -95,8 +115,9 @@ class DeviceNode:
             if not self.wait_until_ready():
                 return
             self.state = "streaming"
-            rospy.loginfo("%s: streaming %s to %s", self.node_name, self.device.describe(),
-                          self.publisher.resolved_name)
+            rospy.loginfo(
+                "%s: streaming %s to %s", self.node_name, self.device.describe(), self.publisher.resolved_name
+            )
             finished = self.runner.run()
         except MotionSensorError as exc:
             rospy.logfatal("%s: %s", self.node_name, exc)
@@ -105,8 +126,12 @@ class DeviceNode:
             self.device.shutdown()
         if finished:
             self.state = "finished"
-            rospy.loginfo("%s: %s done, %d samples published", self.node_name, self.device.describe(),
-                          self.device.counters["published"])
+            rospy.loginfo(
+                "%s: %s done, %d samples published",
+                self.node_name,
+                self.device.describe(),
+                self.device.counters["published"],
+            )
             self.publish_diagnostics(None)
             if self.finished_pub is not None:
                 self.finished_pub.publish(Bool(True))
@@ -117,13 +142,18 @@ class DeviceNode:
         status = DiagnosticStatus(name=f"motion_sensor: {self.node_name}", hardware_id=self.device.name)
         if self.device.connected or self.state == "finished":
             status.level = DiagnosticStatus.OK
-            status.message = (f"{self.device.describe()}: {counters.get('published', 0)} published, "
-                              f"{counters.get('rejected', 0)} rejected, {counters.get('invalid_samples', 0)} invalid")
+            status.message = (
+                f"{self.device.describe()}: {counters.get('published', 0)} published, "
+                f"{counters.get('rejected', 0)} rejected, {counters.get('invalid_samples', 0)} invalid"
+            )
         else:
             status.level = DiagnosticStatus.WARN
             problem = self.runner.last_problem
-            status.message = (f"{self.device.describe()}: not connected" + (f" ({problem})" if problem else "")
-                              if self.state == "streaming" else f"{self.device.describe()}: {self.state}")
+            status.message = (
+                f"{self.device.describe()}: not connected" + (f" ({problem})" if problem else "")
+                if self.state == "streaming"
+                else f"{self.device.describe()}: {self.state}"
+            )
         status.values = [KeyValue(key=str(k), value=str(v)) for k, v in sorted(counters.items())]
         array = DiagnosticArray(status=[status])
         array.header.stamp = rospy.Time.now()

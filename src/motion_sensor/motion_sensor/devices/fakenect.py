@@ -21,11 +21,12 @@ PGM's big-endian). Debian's fakenect (0.5.3) plays only ``FREENECT_DEPTH_11BIT``
 aborts on the mm format), sleeps to reproduce the recorded spacing, and crashes when the
 index runs out, so a reader stops one frame before the end (``depth_frame_count``).
 """
+
 import glob
 import hashlib
 import os
 import subprocess
-from typing import Iterable, Optional
+from collections.abc import Iterable
 
 import numpy as np
 
@@ -66,18 +67,20 @@ def m_to_raw11(depth_m: np.ndarray) -> np.ndarray:
 
 def fakenect_library() -> str:
     """Path of Debian's fakenect libfreenect.so.0.5; MotionSensorError if not installed."""
-    found = sorted(glob.glob("/usr/lib/*/fakenect/libfreenect.so.0.5")) + \
-        sorted(glob.glob("/usr/lib/fakenect/libfreenect.so.0.5"))
+    found = sorted(glob.glob("/usr/lib/*/fakenect/libfreenect.so.0.5")) + sorted(
+        glob.glob("/usr/lib/fakenect/libfreenect.so.0.5")
+    )
     if not found:
         raise MotionSensorError("fakenect is not installed: apt-get install libfreenect0.5 (scripts/setup does)")
     return found[0]
 
 
-def build_stub(cache_dir: Optional[str] = None, compiler: str = "gcc") -> str:
+def build_stub(cache_dir: str | None = None, compiler: str = "gcc") -> str:
     """Path of the compiled stub library (built once per source version into ``cache_dir``,
     default ~/.cache/motion_sensor); MotionSensorError naming the fix if gcc fails."""
-    cache_dir = cache_dir or os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"),
-                                          "motion_sensor")
+    cache_dir = cache_dir or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "motion_sensor"
+    )
     digest = hashlib.sha256(STUB_SOURCE.encode()).hexdigest()[:12]
     target = os.path.join(cache_dir, f"fakenect_stub-{digest}.so")
     if os.path.exists(target):
@@ -88,13 +91,18 @@ def build_stub(cache_dir: Optional[str] = None, compiler: str = "gcc") -> str:
         stream.write(STUB_SOURCE)
     partial = f"{target}.{os.getpid()}.tmp"
     try:
-        subprocess.run([compiler, "-shared", "-fPIC", "-O2", "-o", partial, source], check=True,
-                       capture_output=True, text=True, timeout=60)
+        subprocess.run(
+            [compiler, "-shared", "-fPIC", "-O2", "-o", partial, source],
+            check=True,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
     except FileNotFoundError:
         raise MotionSensorError(f"cannot build the fakenect stub: {compiler} not found (apt-get install gcc)") from None
     except subprocess.CalledProcessError as exc:
         raise MotionSensorError(f"cannot build the fakenect stub: {exc.stderr.strip()}") from None
-    os.replace(partial, target)   # atomic: a concurrent build never sees half a library
+    os.replace(partial, target)  # atomic: a concurrent build never sees half a library
     return target
 
 

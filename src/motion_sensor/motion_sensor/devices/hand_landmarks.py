@@ -16,13 +16,13 @@ size is the model's idea of a hand, not the user's, so the result is as large as
 hand is to the user's; a one-time calibration at a known distance stores the ratio as
 ``depth_scale`` (``calibrate_depth_scale``), which scales the whole hand and its position.
 """
+
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Optional, Sequence
 
 import numpy as np
 
 from motion_common.rotations import matrix_to_quaternion, with_positive_w
-
 from motion_sensor.devices.camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
 
 WRIST = 0
@@ -36,6 +36,7 @@ NUM_LANDMARKS = 21
 PALM = (WRIST, INDEX_MCP, MIDDLE_MCP, RING_MCP, PINKY_MCP)
 #: (MCP, PIP, DIP, TIP) of the four fingers.
 FINGERS = tuple((base, base + 1, base + 2, base + 3) for base in (INDEX_MCP, MIDDLE_MCP, RING_MCP, PINKY_MCP))
+
 
 @dataclass
 class DetectedHand:
@@ -66,7 +67,7 @@ class GestureThresholds:
     pinch_open_m: float = 0.07
 
 
-def landmark_problem(hand: DetectedHand) -> Optional[str]:
+def landmark_problem(hand: DetectedHand) -> str | None:
     """Why a detection cannot be used (wrong shapes, non-finite values), or None."""
     image = np.asarray(hand.image, dtype=float)
     world = np.asarray(hand.world, dtype=float)
@@ -79,8 +80,9 @@ def landmark_problem(hand: DetectedHand) -> Optional[str]:
     return None
 
 
-def hand_translation(image: np.ndarray, world: np.ndarray, intrinsics: Intrinsics,
-                     indices: Sequence[int] = PALM) -> np.ndarray:
+def hand_translation(
+    image: np.ndarray, world: np.ndarray, intrinsics: Intrinsics, indices: Sequence[int] = PALM
+) -> np.ndarray:
     """Position (m, optical frame) of the world landmarks' origin that projects them onto
     their pixels, before calibration; NaNs when the landmarks have no consistent size.
 
@@ -191,8 +193,12 @@ class PalmPose:
     raw_depth: float
 
 
-def palm_pose(hand: DetectedHand, intrinsics: Intrinsics, depth_scale: float = 1.0,
-              thresholds: GestureThresholds = GestureThresholds()) -> PalmPose:
+def palm_pose(
+    hand: DetectedHand,
+    intrinsics: Intrinsics,
+    depth_scale: float = 1.0,
+    thresholds: GestureThresholds = GestureThresholds(),
+) -> PalmPose:
     """The palm pose of one detected hand in the camera's REP 103 frame (x forward along the
     optical axis, y left, z up). ``depth_scale`` is the calibrated ratio of true to estimated
     depth; it also scales the model's metric hand to the user's. Raises ValueError for a
@@ -209,12 +215,14 @@ def palm_pose(hand: DetectedHand, intrinsics: Intrinsics, depth_scale: float = 1
     index_tip = depth_scale * (translation + world[INDEX_TIP])
     raw_depth = float(raw_centre[2])
     rotation = palm_rotation(world, hand.handedness)
-    return PalmPose(position=OPTICAL_TO_REP103 @ centre,
-                    orientation=with_positive_w(matrix_to_quaternion(OPTICAL_TO_REP103 @ rotation)),
-                    index_tip=OPTICAL_TO_REP103 @ index_tip,
-                    grab_strength=grab_strength(world, thresholds),
-                    pinch_strength=pinch_strength(world, thresholds),
-                    raw_depth=raw_depth)
+    return PalmPose(
+        position=OPTICAL_TO_REP103 @ centre,
+        orientation=with_positive_w(matrix_to_quaternion(OPTICAL_TO_REP103 @ rotation)),
+        index_tip=OPTICAL_TO_REP103 @ index_tip,
+        grab_strength=grab_strength(world, thresholds),
+        pinch_strength=pinch_strength(world, thresholds),
+        raw_depth=raw_depth,
+    )
 
 
 def calibrate_depth_scale(raw_depths: Sequence[float], true_depth_m: float) -> float:

@@ -6,19 +6,26 @@ string {"focused":true} (Ultraleap's bridge matches control messages as exact st
 parses every frame, and reconnects with exponential backoff when the socket drops.
 ``LeapDevice`` is the Leap as a HandDevice (nodes/leap_driver).
 """
+
 import threading
 import time
 from collections import Counter, deque
-from typing import Callable, Optional
+from collections.abc import Callable
 
 from websockets.exceptions import ConnectionClosed, InvalidHandshake, InvalidURI
 from websockets.sync.client import connect
 
 from motion_common.params import Param, ParamSchema
-
-from motion_sensor.devices.device import HAND_TYPE_PARAM, Backoff, HandDevice, empty_sample, hand_preference, reconnect_loop
-from motion_sensor.errors import DeviceUnavailable, MotionSensorError
+from motion_sensor.devices.device import (
+    HAND_TYPE_PARAM,
+    Backoff,
+    HandDevice,
+    empty_sample,
+    hand_preference,
+    reconnect_loop,
+)
 from motion_sensor.devices.leap_v6 import LeapFrame, frame_to_sample, parse_message
+from motion_sensor.errors import DeviceUnavailable, MotionSensorError
 
 FOCUSED = '{"focused":true}'
 
@@ -63,9 +70,18 @@ class LeapClient:
     ``wait(seconds)`` (injectable: tests need no real sleeping).
     """
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 6437, on_frame: Callable = None,
-                 on_problem: Callable = None, backoff: Optional[Backoff] = None, clock=time.time,
-                 open_timeout: float = 2.0, frame_timeout: float = 2.0, wait: Callable[[float], object] = None):
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = 6437,
+        on_frame: Callable = None,
+        on_problem: Callable = None,
+        backoff: Backoff | None = None,
+        clock=time.time,
+        open_timeout: float = 2.0,
+        frame_timeout: float = 2.0,
+        wait: Callable[[float], object] = None,
+    ):
         if not 0 < int(port) < 65536:
             raise MotionSensorError(f"leap port must be 1-65535, got {port!r}")
         self.uri = f"ws://{host}:{int(port)}/v6.json"
@@ -91,15 +107,16 @@ class LeapClient:
         """Open the socket and do the v6 handshake; DeviceUnavailable when that fails."""
         try:
             # close_timeout is short: on stop() nobody should wait 10 s for a closing handshake.
-            socket = connect(self.uri, open_timeout=self.open_timeout, max_size=4 * 1024 * 1024,
-                             compression=None, close_timeout=0.5).__enter__()  # as `with` would
+            socket = connect(
+                self.uri, open_timeout=self.open_timeout, max_size=4 * 1024 * 1024, compression=None, close_timeout=0.5
+            ).__enter__()  # as `with` would
         except _SOCKET_ERRORS as exc:
             raise DeviceUnavailable(f"leap connection to {self.uri} refused ({type(exc).__name__}: {exc})") from None
         self._socket = socket
         try:
             first = socket.recv(timeout=self.open_timeout)
             if parse_message(first) is not None or '"version"' not in str(first):
-                raise DeviceUnavailable(f"expected the {{\"version\":6}} handshake, got {str(first)[:60]!r}")
+                raise DeviceUnavailable(f'expected the {{"version":6}} handshake, got {str(first)[:60]!r}')
             socket.send(FOCUSED)
         except (MotionSensorError, *_SOCKET_ERRORS) as exc:
             self.close()
@@ -147,10 +164,10 @@ class LeapClient:
         finally:
             self.close()
 
-    def _handle(self, message) -> Optional[LeapFrame]:
+    def _handle(self, message) -> LeapFrame | None:
         self.counters["messages"] += 1
         try:
-            frame: Optional[LeapFrame] = parse_message(message)
+            frame: LeapFrame | None = parse_message(message)
         except MotionSensorError as exc:
             self.counters["rejected"] += 1
             self.on_problem(f"rejected Leap message: {exc}")
@@ -169,21 +186,32 @@ class LeapDevice(HandDevice):
 
     name = "leap"
     default_frame_id = "leap"
-    params = ParamSchema([
-        Param("host", "127.0.0.1", doc="Leap service host"),
-        Param("port", 6437, low=1, high=65535, doc="Leap service port"),
-        Param("primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"),
-        HAND_TYPE_PARAM,
-        Param("open_timeout_s", 2.0, unit="s", low=0, low_open=True, doc="connect and handshake timeout"),
-        Param("frame_timeout_s", 2.0, unit="s", low=0, low_open=True, doc="silence that counts as a lost connection"),
-    ])
+    params = ParamSchema(
+        [
+            Param("host", "127.0.0.1", doc="Leap service host"),
+            Param("port", 6437, low=1, high=65535, doc="Leap service port"),
+            Param(
+                "primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"
+            ),
+            HAND_TYPE_PARAM,
+            Param("open_timeout_s", 2.0, unit="s", low=0, low_open=True, doc="connect and handshake timeout"),
+            Param(
+                "frame_timeout_s", 2.0, unit="s", low=0, low_open=True, doc="silence that counts as a lost connection"
+            ),
+        ]
+    )
 
     def __init__(self, config, **kw):
         super().__init__(config, **kw)
         self.primary, self.strict = hand_preference(self.config)
-        self.client = LeapClient(self.config["host"], self.config["port"], on_problem=lambda text: self.warn(text),
-                                 clock=self.clock, open_timeout=self.config["open_timeout_s"],
-                                 frame_timeout=self.config["frame_timeout_s"])
+        self.client = LeapClient(
+            self.config["host"],
+            self.config["port"],
+            on_problem=lambda text: self.warn(text),
+            clock=self.clock,
+            open_timeout=self.config["open_timeout_s"],
+            frame_timeout=self.config["frame_timeout_s"],
+        )
         self.counters = self.client.counters  # one set of counters: rejected messages, frames, ...
         self.mapper = ClockMapper()
 

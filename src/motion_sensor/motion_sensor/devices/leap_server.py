@@ -6,12 +6,12 @@ driver and the sequencer: malformed, truncated, oversized and NaN frames, dropou
 lost), and hand exit and entry (frames without hands). Used by the rostests and the
 ``leap_replay_server`` tool.
 """
+
 import gzip
 import json
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import List, Optional
 
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.server import serve
@@ -23,17 +23,17 @@ from motion_sensor.errors import MotionSensorError
 class Faults:
     """Which faults to inject, by frame index of the recording."""
 
-    malformed: List[int] = field(default_factory=list)     # replaced by broken JSON
-    truncated: List[int] = field(default_factory=list)     # cut in half
-    oversized: List[int] = field(default_factory=list)     # padded past 256 kB
-    nan: List[int] = field(default_factory=list)           # palmPosition becomes NaN
-    dropout_at: Optional[int] = None                        # frames from this one ...
-    dropout_s: float = 0.0                                  # ... for this long are lost (not sent)
-    exit_at: Optional[int] = None                           # from here, frames carry no hand ...
-    exit_frames: int = 0                                    # ... for this many frames (then re-entry)
+    malformed: list[int] = field(default_factory=list)  # replaced by broken JSON
+    truncated: list[int] = field(default_factory=list)  # cut in half
+    oversized: list[int] = field(default_factory=list)  # padded past 256 kB
+    nan: list[int] = field(default_factory=list)  # palmPosition becomes NaN
+    dropout_at: int | None = None  # frames from this one ...
+    dropout_s: float = 0.0  # ... for this long are lost (not sent)
+    exit_at: int | None = None  # from here, frames carry no hand ...
+    exit_frames: int = 0  # ... for this many frames (then re-entry)
 
 
-def load_lines(path: str) -> List[str]:
+def load_lines(path: str) -> list[str]:
     """The messages of a .jsonl/.jsonl.gz recording, version line first."""
     opener = gzip.open if path.endswith(".gz") else open
     try:
@@ -42,7 +42,7 @@ def load_lines(path: str) -> List[str]:
     except OSError as exc:
         raise MotionSensorError(f"cannot read recording {path}: {exc}") from None
     if not lines or '"version"' not in lines[0]:
-        raise MotionSensorError(f"{path} does not start with the Leap {{\"version\":6}} line")
+        raise MotionSensorError(f'{path} does not start with the Leap {{"version":6}} line')
     return lines
 
 
@@ -72,15 +72,23 @@ class LeapReplayServer:
     the exact {"focused":true}); ``done`` is set when a full pass has been sent.
     """
 
-    def __init__(self, path: str, host: str = "127.0.0.1", port: int = 6437, rate: float = 1.0,
-                 loop: bool = False, faults: Optional[Faults] = None, start_delay: float = 0.0):
+    def __init__(
+        self,
+        path: str,
+        host: str = "127.0.0.1",
+        port: int = 6437,
+        rate: float = 1.0,
+        loop: bool = False,
+        faults: Faults | None = None,
+        start_delay: float = 0.0,
+    ):
         self.lines = load_lines(path)
         self.frames = self.lines[1:]
         self.stamps = [json.loads(line).get("timestamp", 0) * 1e-6 for line in self.frames]
         self.host, self.port, self.rate, self.loop = host, port, rate, loop
         self.faults = faults or Faults()
         self.start_delay = start_delay
-        self.received: List[str] = []
+        self.received: list[str] = []
         self.sent = 0
         self.send_times = {}  # frame index -> time.time() when sent (latency benchmarks)
         self.done = threading.Event()
@@ -127,8 +135,9 @@ class LeapReplayServer:
 
     def serve_forever(self) -> None:
         """Serve until shutdown()."""
-        with serve(self._handler, self.host, self.port, compression=None, max_size=4 * 1024 * 1024,
-                   close_timeout=0.5) as server:
+        with serve(
+            self._handler, self.host, self.port, compression=None, max_size=4 * 1024 * 1024, close_timeout=0.5
+        ) as server:
             self._server = server
             server.serve_forever()
 

@@ -5,11 +5,11 @@ frame. Leap's axes are x right, y up (away from the device), z toward the operat
 millimetres; everything leaving this module is in metres and REP 103 axes
 (x forward away from the operator, y left, z up).
 """
+
 import gzip
 import json
 import math
 from dataclasses import dataclass
-from typing import List, Optional
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -34,10 +34,10 @@ class LeapHand:
     confidence: float
     position: np.ndarray
     orientation: np.ndarray
-    stabilized_position: Optional[np.ndarray]
-    grab_strength: float = -1.0            # 0 open .. 1 fist; -1 when the frame lacks it
-    pinch_strength: float = -1.0           # 0 apart .. 1 touching; -1 when the frame lacks it
-    index_tip: Optional[np.ndarray] = None  # m, REP 103; from the frame's pointables
+    stabilized_position: np.ndarray | None
+    grab_strength: float = -1.0  # 0 open .. 1 fist; -1 when the frame lacks it
+    pinch_strength: float = -1.0  # 0 apart .. 1 touching; -1 when the frame lacks it
+    index_tip: np.ndarray | None = None  # m, REP 103; from the frame's pointables
 
 
 @dataclass
@@ -46,7 +46,7 @@ class LeapFrame:
 
     frame_id: int
     timestamp: float
-    hands: List[LeapHand]
+    hands: list[LeapHand]
 
 
 def _vector(hand: dict, key: str) -> np.ndarray:
@@ -119,7 +119,7 @@ def parse_hand(hand: dict) -> LeapHand:
         raise MotionSensorError(f"a hand must be a JSON object, got {type(hand).__name__}")
     hand_type = hand.get("type")
     if hand_type not in ("left", "right"):
-        raise MotionSensorError(f"hand field 'type' must be \"left\" or \"right\", got {hand_type!r:.40}")
+        raise MotionSensorError(f'hand field \'type\' must be "left" or "right", got {hand_type!r:.40}')
     hand_id = hand.get("id")
     if not isinstance(hand_id, int) or isinstance(hand_id, bool):
         raise MotionSensorError(f"hand field 'id' must be an integer, got {hand_id!r:.40}")
@@ -131,11 +131,19 @@ def parse_hand(hand: dict) -> LeapHand:
     stabilized = None
     if "stabilizedPalmPosition" in hand:
         stabilized = LEAP_TO_REP103 @ _vector(hand, "stabilizedPalmPosition") / 1000.0
-    return LeapHand(hand_id, hand_type, float(confidence), position, orientation, stabilized,
-                    _strength(hand, "grabStrength"), _strength(hand, "pinchStrength"))
+    return LeapHand(
+        hand_id,
+        hand_type,
+        float(confidence),
+        position,
+        orientation,
+        stabilized,
+        _strength(hand, "grabStrength"),
+        _strength(hand, "pinchStrength"),
+    )
 
 
-def parse_message(text, max_bytes: int = MAX_MESSAGE_BYTES) -> Optional[LeapFrame]:
+def parse_message(text, max_bytes: int = MAX_MESSAGE_BYTES) -> LeapFrame | None:
     """Parse one WebSocket message; return its LeapFrame, or None for a non-frame message.
 
     Non-frame messages are the ``{"version": N}`` handshake and event messages. Raises
@@ -170,7 +178,7 @@ def parse_message(text, max_bytes: int = MAX_MESSAGE_BYTES) -> Optional[LeapFram
     return LeapFrame(frame_id, timestamp * 1e-6, parsed)
 
 
-def select_primary(frame: LeapFrame, preference: str = "right", strict: bool = False) -> Optional[LeapHand]:
+def select_primary(frame: LeapFrame, preference: str = "right", strict: bool = False) -> LeapHand | None:
     """Pick the primary hand: the preferred type if present, else the first hand.
 
     ``preference`` is "right", "left" or "first" (device order). With ``strict`` only the
@@ -190,8 +198,9 @@ def select_primary(frame: LeapFrame, preference: str = "right", strict: bool = F
     return frame.hands[0]
 
 
-def frame_to_sample(frame: LeapFrame, stamp: float, preference: str = "right",
-                    frame_id: str = "leap", strict: bool = False) -> Optional[HandSample]:
+def frame_to_sample(
+    frame: LeapFrame, stamp: float, preference: str = "right", frame_id: str = "leap", strict: bool = False
+) -> HandSample | None:
     """Build the HandSample of a frame's primary hand, or None when no hand is seen.
 
     The primary hand is listed first in ``hand_types`` so consumers can read its type.
@@ -200,12 +209,21 @@ def frame_to_sample(frame: LeapFrame, stamp: float, preference: str = "right",
     if primary is None:
         return None
     others = [h.hand_type for h in frame.hands if h is not primary]
-    return HandSample(stamp=stamp, position=primary.position, orientation=primary.orientation,
-                      hands_num=len(frame.hands), hand_types=tuple([primary.hand_type] + others),
-                      frame_id=frame_id, hand_id=primary.hand_id, device="leap",
-                      extra={"confidence": primary.confidence, "device_time": frame.timestamp},
-                      confidence=primary.confidence, grab_strength=primary.grab_strength,
-                      pinch_strength=primary.pinch_strength, index_tip=primary.index_tip)
+    return HandSample(
+        stamp=stamp,
+        position=primary.position,
+        orientation=primary.orientation,
+        hands_num=len(frame.hands),
+        hand_types=tuple([primary.hand_type] + others),
+        frame_id=frame_id,
+        hand_id=primary.hand_id,
+        device="leap",
+        extra={"confidence": primary.confidence, "device_time": frame.timestamp},
+        confidence=primary.confidence,
+        grab_strength=primary.grab_strength,
+        pinch_strength=primary.pinch_strength,
+        index_tip=primary.index_tip,
+    )
 
 
 @dataclass
@@ -213,8 +231,8 @@ class LeapRecording:
     """A Leap v6 recording: its frames and the lines that could not be used."""
 
     path: str
-    frames: List[LeapFrame]
-    rejected: List[str]
+    frames: list[LeapFrame]
+    rejected: list[str]
 
     @property
     def duration(self) -> float:
@@ -243,9 +261,12 @@ def read_recording(path: str) -> LeapRecording:
                 if frame is not None:
                     frames.append(frame)
     except (OSError, EOFError, UnicodeDecodeError) as exc:
-        raise MotionSensorError(f"cannot read Leap recording {path}: {exc}; "
-                                "give a .jsonl or .jsonl.gz file in the Leap v6 format") from None
+        raise MotionSensorError(
+            f"cannot read Leap recording {path}: {exc}; give a .jsonl or .jsonl.gz file in the Leap v6 format"
+        ) from None
     if not frames:
-        raise MotionSensorError(f"Leap recording {path} holds no tracking frame "
-                                f"({len(rejected)} lines rejected); is it a Leap v6 .jsonl recording?")
+        raise MotionSensorError(
+            f"Leap recording {path} holds no tracking frame "
+            f"({len(rejected)} lines rejected); is it a Leap v6 .jsonl recording?"
+        )
     return LeapRecording(path, frames, rejected)

@@ -5,21 +5,21 @@ everything after it is plain numpy. MediaPipe is imported only when a ``MediaPip
 is built, so the maths and the device logic are tested with fake detectors without it.
 mediapipe 0.10.21 carries its models inside the wheel: nothing is downloaded at run time.
 """
+
 import abc
 import os
-from typing import List
 
 import numpy as np
 
-from motion_sensor.errors import MotionSensorError
 from motion_sensor.devices.hand_landmarks import NUM_LANDMARKS, DetectedHand
+from motion_sensor.errors import MotionSensorError
 
 
 class HandDetector(abc.ABC):
     """Finds hands in an RGB image (H x W x 3 uint8, unmirrored: the camera's own view)."""
 
     @abc.abstractmethod
-    def detect(self, rgb: np.ndarray) -> List[DetectedHand]:
+    def detect(self, rgb: np.ndarray) -> list[DetectedHand]:
         """Every hand seen, best first."""
 
     def close(self) -> None:
@@ -34,29 +34,40 @@ class MediaPipeHandDetector(HandDetector):
     True runs the detector on every frame (independent images, several times slower).
     """
 
-    def __init__(self, max_num_hands: int = 2, model_complexity: int = 1, min_detection_confidence: float = 0.5,
-                 min_tracking_confidence: float = 0.5, static_image_mode: bool = False):
+    def __init__(
+        self,
+        max_num_hands: int = 2,
+        model_complexity: int = 1,
+        min_detection_confidence: float = 0.5,
+        min_tracking_confidence: float = 0.5,
+        static_image_mode: bool = False,
+    ):
         # Quieten TensorFlow Lite's and glog's start-up chatter on stderr (before the import).
         os.environ.setdefault("GLOG_minloglevel", "2")
         os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "2")
         try:
             from mediapipe.python.solutions import hands as mp_hands
         except ImportError as exc:
-            raise MotionSensorError(f"mediapipe is not installed ({exc}); run scripts/setup "
-                                    "(it installs requirements-nodeps.txt)") from None
-        self._hands = mp_hands.Hands(static_image_mode=static_image_mode, max_num_hands=max_num_hands,
-                                     model_complexity=model_complexity,
-                                     min_detection_confidence=min_detection_confidence,
-                                     min_tracking_confidence=min_tracking_confidence)
+            raise MotionSensorError(
+                f"mediapipe is not installed ({exc}); run scripts/setup (it installs requirements-nodeps.txt)"
+            ) from None
+        self._hands = mp_hands.Hands(
+            static_image_mode=static_image_mode,
+            max_num_hands=max_num_hands,
+            model_complexity=model_complexity,
+            min_detection_confidence=min_detection_confidence,
+            min_tracking_confidence=min_tracking_confidence,
+        )
 
-    def detect(self, rgb: np.ndarray) -> List[DetectedHand]:
+    def detect(self, rgb: np.ndarray) -> list[DetectedHand]:
         height, width = rgb.shape[:2]
         result = self._hands.process(np.ascontiguousarray(rgb))
         if not result.multi_hand_landmarks:
             return []
         hands = []
-        for image_lms, world_lms, handedness in zip(result.multi_hand_landmarks, result.multi_hand_world_landmarks,
-                                                    result.multi_handedness):
+        for image_lms, world_lms, handedness in zip(
+            result.multi_hand_landmarks, result.multi_hand_world_landmarks, result.multi_handedness
+        ):
             image = np.array([(lm.x * width, lm.y * height) for lm in image_lms.landmark], dtype=float)
             world = np.array([(lm.x, lm.y, lm.z) for lm in world_lms.landmark], dtype=float)
             if image.shape[0] != NUM_LANDMARKS:

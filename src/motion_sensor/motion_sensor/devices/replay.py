@@ -1,15 +1,17 @@
 """Recorded hand streams: replay schedules, CSV and recording loading, and ReplayDevice,
 a recording as a HandDevice (nodes/hand_replay)."""
+
 import dataclasses
-from typing import Iterable, Iterator, Tuple
+from collections.abc import Iterable, Iterator
 
 from motion_common.params import Param, ParamSchema
-
 from motion_sensor.devices.device import HAND_TYPE_PARAM, HandDevice, empty_sample, hand_preference
 from motion_sensor.errors import EndOfStream, MotionSensorError
 
 
-def replay_schedule(times: Iterable[float], rate: float = 1.0, start_offset: float = 0.0) -> Iterator[Tuple[int, float]]:
+def replay_schedule(
+    times: Iterable[float], rate: float = 1.0, start_offset: float = 0.0
+) -> Iterator[tuple[int, float]]:
     """Yield (index, due seconds after start) for recorded ``times`` (s, any origin).
 
     ``rate`` > 1 plays faster; ``rate`` <= 0 means as fast as possible (every frame due at 0).
@@ -57,9 +59,16 @@ def read_csv(path: str):
                     rejected.append(f"line {lineno}: hand_type must be left, right or empty")
                     continue
                 types = (hand_type,) if hand_type else ()
-                samples.append(HandSample(stamp=values[0], position=np.array(values[1:4]),
-                                          orientation=np.array(values[4:8]), hands_num=len(types),
-                                          hand_types=types, device="csv"))
+                samples.append(
+                    HandSample(
+                        stamp=values[0],
+                        position=np.array(values[1:4]),
+                        orientation=np.array(values[4:8]),
+                        hands_num=len(types),
+                        hand_types=types,
+                        device="csv",
+                    )
+                )
     except OSError as exc:
         raise MotionSensorError(f"cannot read CSV {path}: {exc}") from None
     if not samples:
@@ -76,6 +85,7 @@ def load_samples(path: str, primary: str = "right", frame_id: str = "leap", stri
         import rosbag
 
         from motion_sensor.ros_conversions import msg_to_sample
+
         samples = []
         try:
             with rosbag.Bag(path) as bag:
@@ -96,6 +106,7 @@ def load_samples(path: str, primary: str = "right", frame_id: str = "leap", stri
             sample.frame_id = frame_id
         return [(sample.stamp, sample) for sample in rows], rejected
     from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording
+
     try:
         recording = read_recording(path)
     except OSError as exc:
@@ -119,19 +130,34 @@ class ReplayDevice(HandDevice):
     finite = True
     stamp_on_publish = True
     wrapper_defaults = {"min_subscribers": 1}  # never play to nobody
-    params = ParamSchema([
-        Param("recording", "", doc="Leap v6 .jsonl(.gz), rosbag of motion_sensor/hand (.bag) or CSV (.csv)"),
-        Param("rate", 1.0, low=0, doc="speed factor: 1 the recorded timing, 0 as fast as possible"),
-        Param("loop", False, doc="start again at the end (the node then never finishes)"),
-        Param("repeat", 1, low=1, high=1000,
-              doc="passes over the recording when not looping, each after a pause with no hand (as an operator "
-                  "who lowers the hand and starts again); the node finishes after the last"),
-        Param("repeat_pause", 0.5, unit="s", low=0, high=60,
-              doc="pause between passes; at least the sequencer's hand_lost_s, so each pass is a new entry"),
-        Param("start_offset", 0.0, unit="s", low=0, doc="seconds into the recording to start from"),
-        Param("primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"),
-        HAND_TYPE_PARAM,
-    ])
+    params = ParamSchema(
+        [
+            Param("recording", "", doc="Leap v6 .jsonl(.gz), rosbag of motion_sensor/hand (.bag) or CSV (.csv)"),
+            Param("rate", 1.0, low=0, doc="speed factor: 1 the recorded timing, 0 as fast as possible"),
+            Param("loop", False, doc="start again at the end (the node then never finishes)"),
+            Param(
+                "repeat",
+                1,
+                low=1,
+                high=1000,
+                doc="passes over the recording when not looping, each after a pause with no hand (as an operator "
+                "who lowers the hand and starts again); the node finishes after the last",
+            ),
+            Param(
+                "repeat_pause",
+                0.5,
+                unit="s",
+                low=0,
+                high=60,
+                doc="pause between passes; at least the sequencer's hand_lost_s, so each pass is a new entry",
+            ),
+            Param("start_offset", 0.0, unit="s", low=0, doc="seconds into the recording to start from"),
+            Param(
+                "primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"
+            ),
+            HAND_TYPE_PARAM,
+        ]
+    )
 
     def __init__(self, config, **kw):
         super().__init__(config, **kw)
@@ -154,13 +180,14 @@ class ReplayDevice(HandDevice):
             for problem in self._rejected[:5]:
                 self.warn(f"{self.config['recording']}: {problem}")
             self._rejected = None
-            self.info(f"playing {len(self.samples)} frames ({self.samples[-1][0] - self.samples[0][0]:.2f} s) "
-                      f"at rate {self.config['rate']:.2f}")
+            self.info(
+                f"playing {len(self.samples)} frames ({self.samples[-1][0] - self.samples[0][0]:.2f} s) "
+                f"at rate {self.config['rate']:.2f}"
+            )
         self._restart()
 
     def _restart(self) -> None:
-        self._schedule = replay_schedule([t for t, _ in self.samples], self.config["rate"],
-                                         self.config["start_offset"])
+        self._schedule = replay_schedule([t for t, _ in self.samples], self.config["rate"], self.config["start_offset"])
         self._start = self.clock()
 
     def read(self, now):

@@ -14,19 +14,19 @@ in all), report 2 rotation rx, ry, rz, report 3 the button bitmap; other reports
 battery) are ignored. HID axes: x right, y toward the user, z down; they are turned into
 REP 103 axes of the device frame (x away from the user, y left, z up).
 """
+
 import importlib
 import struct
 import threading
 import time
 from collections import Counter
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Optional, Sequence
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from motion_common.params import Param, ParamSchema
-
 from motion_sensor.devices.device import Backoff, HandDevice, reconnect_loop
 from motion_sensor.errors import DeviceUnavailable, MotionSensorError
 from motion_sensor.hand_sample import HandSample
@@ -54,9 +54,7 @@ KNOWN_DEVICES = {
 
 # HID (x right, y toward the user, z down) -> REP 103 (x away from the user, y left, z up).
 # A proper rotation (det +1), so it maps angular rates the same way as translations.
-HID_TO_REP103 = np.array([[0.0, -1.0, 0.0],
-                          [-1.0, 0.0, 0.0],
-                          [0.0, 0.0, -1.0]])
+HID_TO_REP103 = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 
 TRANSLATION_REPORT, ROTATION_REPORT, BUTTON_REPORT = 1, 2, 3
 HID_BACKENDS = {"hidraw": "hidraw", "libusb": "hid"}  # backend -> hidapi's Python module
@@ -117,21 +115,28 @@ class SpaceMouseDecoder:
 class RateConfig:
     """How deflections become motion (units in the names)."""
 
-    full_scale_counts: float = 350.0      # deflection read at the cap's end stop
-    deadzone: float = 0.08                # fraction of full scale ignored around the centre
-    response_exponent: float = 2.0        # 1 = linear; 2 = fine control near the centre
-    max_speed_mps: float = 0.15           # hand speed at full deflection
-    max_angular_speed_rps: float = 0.8    # hand turn rate at full deflection
-    workspace_half_size_m: float = 0.3    # the virtual hand stays within this box around start
+    full_scale_counts: float = 350.0  # deflection read at the cap's end stop
+    deadzone: float = 0.08  # fraction of full scale ignored around the centre
+    response_exponent: float = 2.0  # 1 = linear; 2 = fine control near the centre
+    max_speed_mps: float = 0.15  # hand speed at full deflection
+    max_angular_speed_rps: float = 0.8  # hand turn rate at full deflection
+    workspace_half_size_m: float = 0.3  # the virtual hand stays within this box around start
     start_position_m: tuple = (0.0, 0.0, 0.2)
-    max_step_s: float = 0.05              # longer gaps are integrated as this long
-    hold_timeout_s: float = 0.25          # a deflection not re-reported for this long is dropped
+    max_step_s: float = 0.05  # longer gaps are integrated as this long
+    hold_timeout_s: float = 0.25  # a deflection not re-reported for this long is dropped
     axis_signs: tuple = (1, 1, 1, 1, 1, 1)  # per REP 103 axis (x y z rx ry rz), to fix a device
 
     def validate(self) -> "RateConfig":
         """Raise MotionSensorError naming the first bad value."""
-        positive = ("full_scale_counts", "response_exponent", "max_speed_mps", "max_angular_speed_rps",
-                    "workspace_half_size_m", "max_step_s", "hold_timeout_s")
+        positive = (
+            "full_scale_counts",
+            "response_exponent",
+            "max_speed_mps",
+            "max_angular_speed_rps",
+            "workspace_half_size_m",
+            "max_step_s",
+            "hold_timeout_s",
+        )
         for name in positive:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
@@ -139,7 +144,9 @@ class RateConfig:
         if not 0 <= self.deadzone < 1:
             raise MotionSensorError(f"spacemouse deadzone must be in [0, 1), got {self.deadzone!r}")
         if len(self.start_position_m) != 3 or not np.all(np.isfinite(self.start_position_m)):
-            raise MotionSensorError(f"spacemouse start_position_m must be 3 finite numbers, got {self.start_position_m!r}")
+            raise MotionSensorError(
+                f"spacemouse start_position_m must be 3 finite numbers, got {self.start_position_m!r}"
+            )
         if len(self.axis_signs) != 6 or any(s not in (1, -1) for s in self.axis_signs):
             raise MotionSensorError(f"spacemouse axis_signs must be six values of 1 or -1, got {self.axis_signs!r}")
         return self
@@ -174,7 +181,7 @@ class RateIntegrator:
         c = self.config
         fraction = np.clip(counts / c.full_scale_counts, -1.0, 1.0)
         live = np.maximum(np.abs(fraction) - c.deadzone, 0.0) / (1.0 - c.deadzone)
-        return np.sign(fraction) * live ** c.response_exponent
+        return np.sign(fraction) * live**c.response_exponent
 
     def rates(self, state: SpaceMouseState, report_age: float):
         """(linear m/s, angular rad/s) in REP 103 axes for a state reported ``report_age`` s ago."""
@@ -200,7 +207,7 @@ class RateIntegrator:
         return self.position.copy(), self.rotation.as_quat()
 
 
-def find_device(hid_module, vendor_id: Optional[int] = None, product_id: Optional[int] = None):
+def find_device(hid_module, vendor_id: int | None = None, product_id: int | None = None):
     """(vendor id, product id, name) of the first SpaceMouse hidapi lists, or None.
 
     With ``vendor_id`` and ``product_id`` that device is looked for; otherwise any of
@@ -224,10 +231,19 @@ class SpaceMouseReader:
     tests). ``run`` blocks until ``stop``.
     """
 
-    def __init__(self, on_report: Callable, on_problem: Callable = None, vendor_id: Optional[int] = None,
-                 product_id: Optional[int] = None, hid_module=None, backoff: Backoff = None,
-                 clock: Callable[[], float] = time.time, read_timeout_ms: int = 50,
-                 on_connect: Callable = None, backend: str = "hidraw"):
+    def __init__(
+        self,
+        on_report: Callable,
+        on_problem: Callable = None,
+        vendor_id: int | None = None,
+        product_id: int | None = None,
+        hid_module=None,
+        backoff: Backoff = None,
+        clock: Callable[[], float] = time.time,
+        read_timeout_ms: int = 50,
+        on_connect: Callable = None,
+        backend: str = "hidraw",
+    ):
         if hid_module is None:
             if backend not in HID_BACKENDS:
                 raise MotionSensorError(f"unknown HID backend {backend!r}; choose one of {sorted(HID_BACKENDS)}")
@@ -253,8 +269,9 @@ class SpaceMouseReader:
     def _find(self):
         found = find_device(self.hid, self.vendor_id, self.product_id)
         if found is None:
-            wanted = (f"{self.vendor_id:04x}:{self.product_id:04x}" if self.vendor_id is not None
-                      else "any known SpaceMouse")
+            wanted = (
+                f"{self.vendor_id:04x}:{self.product_id:04x}" if self.vendor_id is not None else "any known SpaceMouse"
+            )
             raise OSError(f"no HID device {wanted} (is it plugged in, and readable: see the README's udev rule?)")
         return found
 
@@ -286,8 +303,9 @@ class SpaceMouseReader:
 
     def run(self) -> None:
         """Read until stopped; reconnect with backoff after any HID error."""
-        reconnect_loop(self._session, self._stop.is_set, self.backoff, self._stop.wait, self._on_error,
-                       retry=(OSError, ValueError))
+        reconnect_loop(
+            self._session, self._stop.is_set, self.backoff, self._stop.wait, self._on_error, retry=(OSError, ValueError)
+        )
 
     def _on_error(self, exc, delay) -> None:
         self.counters["connection_errors"] += 1
@@ -335,8 +353,12 @@ def format_report_line(seconds: float, report: Sequence[int]) -> str:
 
 def rate_config(config: dict) -> RateConfig:
     """The RateConfig of a validated SpaceMouseDevice config."""
-    return RateConfig(**{name: tuple(config[name]) if isinstance(config[name], list) else config[name]
-                         for name in RateConfig.__dataclass_fields__})
+    return RateConfig(
+        **{
+            name: tuple(config[name]) if isinstance(config[name], list) else config[name]
+            for name in RateConfig.__dataclass_fields__
+        }
+    )
 
 
 class SpaceMouseDevice(HandDevice):
@@ -351,35 +373,61 @@ class SpaceMouseDevice(HandDevice):
     name = "spacemouse"
     default_frame_id = "spacemouse"
     bool_outputs = {"engage": "motion_commander/engage"}
-    params = ParamSchema([
-        Param("rate_hz", 100.0, unit="Hz", low=0, low_open=True, high=1000, doc="virtual hand poses per second"),
-        Param("full_scale_counts", 350.0, unit="counts", low=0, low_open=True, doc="HID counts at the cap's end stop"),
-        Param("deadzone", 0.08, unit="fraction of full scale", low=0, high=0.99, doc="ignored around the centre"),
-        Param("response_exponent", 2.0, low=0, low_open=True, high=5, doc="1 linear; 2 finer control near centre"),
-        Param("max_speed_mps", 0.15, unit="m/s", low=0, low_open=True, high=2, doc="speed at full deflection"),
-        Param("max_angular_speed_rps", 0.8, unit="rad/s", low=0, low_open=True, high=10,
-              doc="turn rate at full deflection"),
-        Param("workspace_half_size_m", 0.3, unit="m", low=0, low_open=True, high=5, doc="box around the start"),
-        Param("start_position_m", [0.0, 0.0, 0.2], unit="m", length=3, doc="virtual hand start"),
-        Param("max_step_s", 0.05, unit="s", low=0, low_open=True, high=1, doc="longest integrated gap"),
-        Param("hold_timeout_s", 0.25, unit="s", low=0, low_open=True, high=5,
-              doc="a deflection not repeated this long counts as released"),
-        Param("axis_signs", [1, 1, 1, 1, 1, 1], length=6, item_kind=int, low=-1, high=1,
-              doc="x y z rx ry rz in REP 103: 1 or -1"),
-        Param("engage_button", 0, low=-1, high=31, doc="button held = engage; -1 none"),
-        Param("hand_type", "right", choices=("right", "left"), doc="hand.msg hand_type it stands in for"),
-        Param("vendor_id", -1, low=-1, high=0xFFFF, doc="USB vendor id; -1 the first known SpaceMouse"),
-        Param("product_id", -1, low=-1, high=0xFFFF, doc="USB product id; -1 the first known SpaceMouse"),
-        Param("hid_backend", "hidraw", choices=tuple(sorted(HID_BACKENDS)), doc="hidapi backend"),
-        Param("report_log", "", doc="replay this report log (lines 'SECONDS HEX') instead of a device"),
-        Param("record_reports", "", doc="write every report to this log"),
-    ])
+    params = ParamSchema(
+        [
+            Param("rate_hz", 100.0, unit="Hz", low=0, low_open=True, high=1000, doc="virtual hand poses per second"),
+            Param(
+                "full_scale_counts", 350.0, unit="counts", low=0, low_open=True, doc="HID counts at the cap's end stop"
+            ),
+            Param("deadzone", 0.08, unit="fraction of full scale", low=0, high=0.99, doc="ignored around the centre"),
+            Param("response_exponent", 2.0, low=0, low_open=True, high=5, doc="1 linear; 2 finer control near centre"),
+            Param("max_speed_mps", 0.15, unit="m/s", low=0, low_open=True, high=2, doc="speed at full deflection"),
+            Param(
+                "max_angular_speed_rps",
+                0.8,
+                unit="rad/s",
+                low=0,
+                low_open=True,
+                high=10,
+                doc="turn rate at full deflection",
+            ),
+            Param("workspace_half_size_m", 0.3, unit="m", low=0, low_open=True, high=5, doc="box around the start"),
+            Param("start_position_m", [0.0, 0.0, 0.2], unit="m", length=3, doc="virtual hand start"),
+            Param("max_step_s", 0.05, unit="s", low=0, low_open=True, high=1, doc="longest integrated gap"),
+            Param(
+                "hold_timeout_s",
+                0.25,
+                unit="s",
+                low=0,
+                low_open=True,
+                high=5,
+                doc="a deflection not repeated this long counts as released",
+            ),
+            Param(
+                "axis_signs",
+                [1, 1, 1, 1, 1, 1],
+                length=6,
+                item_kind=int,
+                low=-1,
+                high=1,
+                doc="x y z rx ry rz in REP 103: 1 or -1",
+            ),
+            Param("engage_button", 0, low=-1, high=31, doc="button held = engage; -1 none"),
+            Param("hand_type", "right", choices=("right", "left"), doc="hand.msg hand_type it stands in for"),
+            Param("vendor_id", -1, low=-1, high=0xFFFF, doc="USB vendor id; -1 the first known SpaceMouse"),
+            Param("product_id", -1, low=-1, high=0xFFFF, doc="USB product id; -1 the first known SpaceMouse"),
+            Param("hid_backend", "hidraw", choices=tuple(sorted(HID_BACKENDS)), doc="hidapi backend"),
+            Param("report_log", "", doc="replay this report log (lines 'SECONDS HEX') instead of a device"),
+            Param("record_reports", "", doc="write every report to this log"),
+        ]
+    )
 
     def __init__(self, config, hid_module=None, **kw):
         super().__init__(config, **kw)
         if any(sign not in (1, -1) for sign in self.config["axis_signs"]):
-            raise MotionSensorError(f"spacemouse axis_signs must be six values of 1 or -1, "
-                                    f"got {self.config['axis_signs']!r}")
+            raise MotionSensorError(
+                f"spacemouse axis_signs must be six values of 1 or -1, got {self.config['axis_signs']!r}"
+            )
         self.rate_hz = self.config["rate_hz"]
         self.integrator = RateIntegrator(rate_config(self.config))
         self.hand_type = self.config["hand_type"]
@@ -393,10 +441,14 @@ class SpaceMouseDevice(HandDevice):
         self.reader = None
         if not self.report_log:
             vendor, product = self.config["vendor_id"], self.config["product_id"]
-            self.reader = SpaceMouseReader(None, clock=self.clock, hid_module=hid_module,
-                                           vendor_id=None if vendor < 0 else vendor,
-                                           product_id=None if product < 0 else product,
-                                           backend=self.config["hid_backend"])
+            self.reader = SpaceMouseReader(
+                None,
+                clock=self.clock,
+                hid_module=hid_module,
+                vendor_id=None if vendor < 0 else vendor,
+                product_id=None if product < 0 else product,
+                backend=self.config["hid_backend"],
+            )
             self.counters = self.reader.counters
 
     def describe(self) -> str:
@@ -467,8 +519,15 @@ class SpaceMouseDevice(HandDevice):
         age = float("inf") if self.last_report is None else now - self.last_report
         position, orientation = self.integrator.update(now, self.decoder.state, age)
         self.counters["samples"] += 1
-        return HandSample(stamp=now, position=position, orientation=orientation, hands_num=1,
-                          hand_types=(self.hand_type,), frame_id=self.frame_id, device="spacemouse")
+        return HandSample(
+            stamp=now,
+            position=position,
+            orientation=orientation,
+            hands_num=1,
+            hand_types=(self.hand_type,),
+            frame_id=self.frame_id,
+            device="spacemouse",
+        )
 
     def close(self) -> None:
         if self.reader is not None:

@@ -15,22 +15,22 @@ Frames that fail to decode are counted (``decode_failures``) and skipped. Frames
 decode but show nothing usable (black, saturated, no hand) go out as hands_num 0 (see
 ``motion_sensor.devices.webcam_hand``).
 """
+
 import functools
 import os
 from collections import Counter
-from typing import Callable, Optional
+from collections.abc import Callable
 
 import numpy as np
 
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema, read_yaml_file
-
-from motion_sensor.devices.device import HandDevice
-from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
 from motion_sensor.devices.camera_intrinsics import Intrinsics
+from motion_sensor.devices.device import HandDevice
 from motion_sensor.devices.hand_landmarks import GestureThresholds
-from motion_sensor.hand_sample import HandSample
 from motion_sensor.devices.webcam_hand import FrameLimits, WebcamHandTracker
+from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
+from motion_sensor.hand_sample import HandSample
 
 
 def load_depth_scale(path: str) -> float:
@@ -39,8 +39,9 @@ def load_depth_scale(path: str) -> float:
     try:
         data = read_yaml_file(path)
     except ParameterError as exc:
-        raise MotionSensorError(f"webcam calibration {exc}; run webcam_hand_calibrate or leave "
-                                "calibration_file empty") from None
+        raise MotionSensorError(
+            f"webcam calibration {exc}; run webcam_hand_calibrate or leave calibration_file empty"
+        ) from None
     value = data.get("depth_scale") if isinstance(data, dict) else None
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.05 <= value <= 20:
         raise MotionSensorError(f"{path}: depth_scale must be a number in [0.05, 20], got {value!r}")
@@ -52,37 +53,66 @@ class WebcamHandDevice(HandDevice):
 
     name = "webcam"
     default_frame_id = "webcam"
-    finite = True           # a video file ends (EndOfStream); a camera never does
-    params = ParamSchema([
-        Param("camera", 0, low=-1, doc="OpenCV camera index; -1 none (then video must be set)"),
-        Param("video", "", doc="play this video file once instead of a camera"),
-        Param("width", 640, unit="px", low=0, doc="requested camera frame width (0: the camera's default)"),
-        Param("height", 480, unit="px", low=0, doc="requested camera frame height (0: the camera's default)"),
-        Param("fps", 30.0, unit="Hz", low=0, doc="requested camera frame rate (0: the camera's default)"),
-        Param("hfov_deg", 60.0, unit="deg", low=10, high=170, doc="horizontal field of view, used when fx is 0"),
-        Param("fx", 0.0, unit="px", low=0, doc="focal length x; 0: from hfov_deg and the frame width"),
-        Param("fy", 0.0, unit="px", low=0, doc="focal length y; 0: equal to fx"),
-        Param("cx", 0.0, unit="px", low=0, doc="principal point x; 0: the image centre"),
-        Param("cy", 0.0, unit="px", low=0, doc="principal point y; 0: the image centre"),
-        Param("depth_scale", 1.0, low=0.05, high=20, doc="true / estimated depth (one-time calibration)"),
-        Param("calibration_file", "", doc="YAML with depth_scale (webcam_hand_calibrate); overrides depth_scale"),
-        Param("mirrored", False, doc="frames are a mirror (selfie) view; they are flipped back before detection"),
-        Param("primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"),
-        Param("max_num_hands", 2, low=1, high=4, doc="hands MediaPipe looks for (2: engage:=gesture needs a second)"),
-        Param("model_complexity", 1, low=0, high=1, doc="MediaPipe landmark model: 0 lite, 1 full"),
-        Param("min_detection_confidence", 0.5, low=0, high=1, doc="MediaPipe palm detection threshold"),
-        Param("min_tracking_confidence", 0.5, low=0, high=1, doc="MediaPipe landmark tracking threshold"),
-        Param("static_image_mode", False, doc="detect on every frame instead of tracking (several times slower)"),
-        Param("black_level", 12.0, low=0, high=255, doc="mean grey (0-255) below which a frame is black"),
-        Param("saturated_fraction", 0.8, low=0, high=1, doc="fraction of white pixels above which a frame is saturated"),
-        Param("curl_open_deg", 60.0, unit="deg", low=0, high=270, doc="finger curl (sum of its joint bends) counted as open (grab 0)"),
-        Param("curl_fist_deg", 230.0, unit="deg", low=0, high=270, doc="finger curl counted as closed (grab 1)"),
-        Param("pinch_touch_m", 0.02, unit="m", low=0, doc="thumb-finger tip distance counted as touching (pinch 1)"),
-        Param("pinch_open_m", 0.07, unit="m", low=0, low_open=True, doc="thumb-finger tip distance counted as apart (pinch 0)"),
-    ])
+    finite = True  # a video file ends (EndOfStream); a camera never does
+    params = ParamSchema(
+        [
+            Param("camera", 0, low=-1, doc="OpenCV camera index; -1 none (then video must be set)"),
+            Param("video", "", doc="play this video file once instead of a camera"),
+            Param("width", 640, unit="px", low=0, doc="requested camera frame width (0: the camera's default)"),
+            Param("height", 480, unit="px", low=0, doc="requested camera frame height (0: the camera's default)"),
+            Param("fps", 30.0, unit="Hz", low=0, doc="requested camera frame rate (0: the camera's default)"),
+            Param("hfov_deg", 60.0, unit="deg", low=10, high=170, doc="horizontal field of view, used when fx is 0"),
+            Param("fx", 0.0, unit="px", low=0, doc="focal length x; 0: from hfov_deg and the frame width"),
+            Param("fy", 0.0, unit="px", low=0, doc="focal length y; 0: equal to fx"),
+            Param("cx", 0.0, unit="px", low=0, doc="principal point x; 0: the image centre"),
+            Param("cy", 0.0, unit="px", low=0, doc="principal point y; 0: the image centre"),
+            Param("depth_scale", 1.0, low=0.05, high=20, doc="true / estimated depth (one-time calibration)"),
+            Param("calibration_file", "", doc="YAML with depth_scale (webcam_hand_calibrate); overrides depth_scale"),
+            Param("mirrored", False, doc="frames are a mirror (selfie) view; they are flipped back before detection"),
+            Param(
+                "primary_hand", "right", choices=("right", "left", "first"), doc="hand that steers when two are seen"
+            ),
+            Param(
+                "max_num_hands", 2, low=1, high=4, doc="hands MediaPipe looks for (2: engage:=gesture needs a second)"
+            ),
+            Param("model_complexity", 1, low=0, high=1, doc="MediaPipe landmark model: 0 lite, 1 full"),
+            Param("min_detection_confidence", 0.5, low=0, high=1, doc="MediaPipe palm detection threshold"),
+            Param("min_tracking_confidence", 0.5, low=0, high=1, doc="MediaPipe landmark tracking threshold"),
+            Param("static_image_mode", False, doc="detect on every frame instead of tracking (several times slower)"),
+            Param("black_level", 12.0, low=0, high=255, doc="mean grey (0-255) below which a frame is black"),
+            Param(
+                "saturated_fraction",
+                0.8,
+                low=0,
+                high=1,
+                doc="fraction of white pixels above which a frame is saturated",
+            ),
+            Param(
+                "curl_open_deg",
+                60.0,
+                unit="deg",
+                low=0,
+                high=270,
+                doc="finger curl (sum of its joint bends) counted as open (grab 0)",
+            ),
+            Param("curl_fist_deg", 230.0, unit="deg", low=0, high=270, doc="finger curl counted as closed (grab 1)"),
+            Param(
+                "pinch_touch_m", 0.02, unit="m", low=0, doc="thumb-finger tip distance counted as touching (pinch 1)"
+            ),
+            Param(
+                "pinch_open_m",
+                0.07,
+                unit="m",
+                low=0,
+                low_open=True,
+                doc="thumb-finger tip distance counted as apart (pinch 0)",
+            ),
+        ]
+    )
 
-    def __init__(self, config, detector_factory: Callable[[dict], object] = None,
-                 capture_factory: Callable = None, **kw):
+    def __init__(
+        self, config, detector_factory: Callable[[dict], object] = None, capture_factory: Callable = None, **kw
+    ):
         super().__init__(config, **kw)
         cfg = self.config
         if not cfg["video"] and cfg["camera"] < 0:
@@ -95,17 +125,23 @@ class WebcamHandDevice(HandDevice):
         self._detector_factory = detector_factory or _mediapipe_factory
         self._capture_factory = capture_factory
         self.tracker = WebcamHandTracker(
-            detector=None, frame_id=self.frame_id, intrinsics=self._intrinsics(), hfov_deg=cfg["hfov_deg"],
-            depth_scale=depth_scale, primary_hand=cfg["primary_hand"],
-            thresholds=GestureThresholds(cfg["curl_open_deg"], cfg["curl_fist_deg"], cfg["pinch_touch_m"],
-                                         cfg["pinch_open_m"]),
+            detector=None,
+            frame_id=self.frame_id,
+            intrinsics=self._intrinsics(),
+            hfov_deg=cfg["hfov_deg"],
+            depth_scale=depth_scale,
+            primary_hand=cfg["primary_hand"],
+            thresholds=GestureThresholds(
+                cfg["curl_open_deg"], cfg["curl_fist_deg"], cfg["pinch_touch_m"], cfg["pinch_open_m"]
+            ),
             limits=FrameLimits(black_level=cfg["black_level"], saturated_fraction=cfg["saturated_fraction"]),
-            mirrored=cfg["mirrored"])
+            mirrored=cfg["mirrored"],
+        )
         self.tracker.counters = self.counters  # one set of counters on /diagnostics
-        self._source = None      # the camera or video, kept across reconnects
-        self._synced: Counter = Counter()   # its counters already added to ours
+        self._source = None  # the camera or video, kept across reconnects
+        self._synced: Counter = Counter()  # its counters already added to ours
 
-    def _intrinsics(self) -> Optional[Intrinsics]:
+    def _intrinsics(self) -> Intrinsics | None:
         cfg = self.config
         if cfg["fx"] <= 0:
             return None
@@ -139,9 +175,13 @@ class WebcamHandDevice(HandDevice):
         cfg = self.config
         if cfg["video"]:
             try:
-                source = video_capture.VideoSource(cfg["video"], fallback_fps=None, clock=self.clock,
-                                                   sleep=self.sleep,
-                                                   open_capture=self._capture_factory or cv2.VideoCapture)
+                source = video_capture.VideoSource(
+                    cfg["video"],
+                    fallback_fps=None,
+                    clock=self.clock,
+                    sleep=self.sleep,
+                    open_capture=self._capture_factory or cv2.VideoCapture,
+                )
             except video_capture.FrameSourceError as exc:  # a file OpenCV cannot play will not heal: stop
                 raise MotionSensorError(str(exc)) from None
             self.info(f"playing {cfg['video']}: {source.frame_count} frames at {source.fps:.2f} fps")
@@ -149,8 +189,15 @@ class WebcamHandDevice(HandDevice):
         # One failed grab and the camera counts as lost: the device runner closes it and
         # opens it again with its backoff.
         return video_capture.DeviceSource(
-            cfg["camera"], cfg["width"], cfg["height"], cfg["fps"], max_failures=1, clock=self.clock,
-            sleep=self.sleep, open_capture=functools.partial(video_capture.open_camera, factory=self._capture_factory))
+            cfg["camera"],
+            cfg["width"],
+            cfg["height"],
+            cfg["fps"],
+            max_failures=1,
+            clock=self.clock,
+            sleep=self.sleep,
+            open_capture=functools.partial(video_capture.open_camera, factory=self._capture_factory),
+        )
 
     def _sync_counters(self) -> None:
         """Add what the frame source counted since the last call to the device's counters,
@@ -160,7 +207,7 @@ class WebcamHandDevice(HandDevice):
                 self.counters[key] += value - self._synced[key]
                 self._synced[key] = value
 
-    def read(self, now: float) -> Optional[HandSample]:
+    def read(self, now: float) -> HandSample | None:
         frame, why = self._source.read()
         self._sync_counters()
         if frame is None:
@@ -184,7 +231,10 @@ class WebcamHandDevice(HandDevice):
 def _mediapipe_factory(config: dict):
     from motion_sensor.devices.mediapipe_hands import MediaPipeHandDetector
 
-    return MediaPipeHandDetector(max_num_hands=config["max_num_hands"], model_complexity=config["model_complexity"],
-                                 min_detection_confidence=config["min_detection_confidence"],
-                                 min_tracking_confidence=config["min_tracking_confidence"],
-                                 static_image_mode=config["static_image_mode"])
+    return MediaPipeHandDetector(
+        max_num_hands=config["max_num_hands"],
+        model_complexity=config["model_complexity"],
+        min_detection_confidence=config["min_detection_confidence"],
+        min_tracking_confidence=config["min_tracking_confidence"],
+        static_image_mode=config["static_image_mode"],
+    )

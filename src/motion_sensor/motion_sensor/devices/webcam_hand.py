@@ -5,17 +5,17 @@ Bad input never produces a pose: a black or saturated frame, a frame without a h
 detection whose landmarks give no pose all go out as a frame without a hand (hands_num 0,
 as the Leap driver sends when the hand leaves), and each is counted by reason.
 """
+
 from collections import Counter
 from dataclasses import dataclass
-from typing import Optional, Tuple
 
 import numpy as np
 
-from motion_sensor.devices.device import empty_sample
 from motion_sensor.devices.camera_intrinsics import Intrinsics
+from motion_sensor.devices.device import empty_sample
 from motion_sensor.devices.hand_landmarks import GestureThresholds, landmark_problem, palm_pose
-from motion_sensor.hand_sample import HandSample
 from motion_sensor.devices.mediapipe_hands import HandDetector
+from motion_sensor.hand_sample import HandSample
 
 
 @dataclass(frozen=True)
@@ -29,10 +29,16 @@ class FrameLimits:
     saturated_fraction: float = 0.8
 
 
-def frame_problem(frame, limits: FrameLimits = FrameLimits()) -> Optional[Tuple[str, str]]:
+def frame_problem(frame, limits: FrameLimits = FrameLimits()) -> tuple[str, str] | None:
     """(counter name, reason) when ``frame`` (BGR uint8 H x W x 3) cannot be used, else None."""
-    if not isinstance(frame, np.ndarray) or frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3 \
-            or frame.shape[0] < 16 or frame.shape[1] < 16:
+    if (
+        not isinstance(frame, np.ndarray)
+        or frame.dtype != np.uint8
+        or frame.ndim != 3
+        or frame.shape[2] != 3
+        or frame.shape[0] < 16
+        or frame.shape[1] < 16
+    ):
         shape = getattr(frame, "shape", None)
         return "bad_frames", f"not a BGR uint8 image of at least 16x16 pixels (shape {shape})"
     sample = frame[::4, ::4]  # every 16th pixel is plenty for a mean and a fraction
@@ -55,10 +61,18 @@ class WebcamHandTracker:
     outcome; ``last_problem`` says why the last frame had no pose.
     """
 
-    def __init__(self, detector: HandDetector, frame_id: str = "webcam", intrinsics: Optional[Intrinsics] = None,
-                 hfov_deg: float = 60.0, depth_scale: float = 1.0, primary_hand: str = "right",
-                 thresholds: GestureThresholds = GestureThresholds(), limits: FrameLimits = FrameLimits(),
-                 mirrored: bool = False):
+    def __init__(
+        self,
+        detector: HandDetector,
+        frame_id: str = "webcam",
+        intrinsics: Intrinsics | None = None,
+        hfov_deg: float = 60.0,
+        depth_scale: float = 1.0,
+        primary_hand: str = "right",
+        thresholds: GestureThresholds = GestureThresholds(),
+        limits: FrameLimits = FrameLimits(),
+        mirrored: bool = False,
+    ):
         self.detector = detector
         self.frame_id = frame_id
         self.intrinsics = intrinsics
@@ -112,10 +126,18 @@ class WebcamHandTracker:
             self._tracked_type = primary.handedness
         self.counters["hands"] += 1
         others = [hand.handedness for hand in usable if hand is not primary]
-        return HandSample(stamp=stamp, position=pose.position, orientation=pose.orientation,
-                          hands_num=len(usable), hand_types=tuple([primary.handedness] + others),
-                          frame_id=self.frame_id, hand_id=self._hand_id, device="webcam",
-                          extra={"raw_depth": pose.raw_depth},
-                          confidence=float(np.clip(primary.score, 0.0, 1.0)),
-                          grab_strength=pose.grab_strength, pinch_strength=pose.pinch_strength,
-                          index_tip=pose.index_tip)
+        return HandSample(
+            stamp=stamp,
+            position=pose.position,
+            orientation=pose.orientation,
+            hands_num=len(usable),
+            hand_types=tuple([primary.handedness] + others),
+            frame_id=self.frame_id,
+            hand_id=self._hand_id,
+            device="webcam",
+            extra={"raw_depth": pose.raw_depth},
+            confidence=float(np.clip(primary.score, 0.0, 1.0)),
+            grab_strength=pose.grab_strength,
+            pinch_strength=pose.pinch_strength,
+            index_tip=pose.index_tip,
+        )

@@ -19,9 +19,10 @@ set (``reject_distance`` set, or ``calibrate_rejection``) answers ``None`` when 
 nearest template is farther than the threshold, so non-gesture motion is not forced into
 a class.
 """
+
 import bisect
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 from dtaidistance import dtw_ndim
@@ -33,15 +34,23 @@ except ImportError:  # pragma: no cover - dtaidistance without its C extension
     _DTW_CC = None
 
 from motion_common.params import Param, ParamSchema
-
 from motion_sensor.gestures.gesture_features import FEATURE_PARAMS, FeatureConfig, features
 
-CLASSIFIER_PARAMS = ParamSchema([
-    Param("window", 0.25, "fraction of length", "Sakoe-Chiba band half-width", low=0.0, high=1.0),
-    Param("k", 1, "templates", "nearest neighbours voting (1 = 1-NN)", low=1, high=15),
-    Param("reject_distance", None, "per-point DTW distance", "open-set threshold; None = closed set",
-          kind=float, low=0.0, nullable=True),
-]).merged(FEATURE_PARAMS)
+CLASSIFIER_PARAMS = ParamSchema(
+    [
+        Param("window", 0.25, "fraction of length", "Sakoe-Chiba band half-width", low=0.0, high=1.0),
+        Param("k", 1, "templates", "nearest neighbours voting (1 = 1-NN)", low=1, high=15),
+        Param(
+            "reject_distance",
+            None,
+            "per-point DTW distance",
+            "open-set threshold; None = closed set",
+            kind=float,
+            low=0.0,
+            nullable=True,
+        ),
+    ]
+).merged(FEATURE_PARAMS)
 
 
 @dataclass
@@ -51,11 +60,11 @@ class Classification:
     nearest other class), the best ``candidate`` even when rejected, the number of DTW
     computations run (``dtw_calls``)."""
 
-    label: Optional[str]
+    label: str | None
     distance: float
     confidence: float
     candidate: str
-    runner_up: Optional[str]
+    runner_up: str | None
     runner_up_distance: float
     rejected: bool
     dtw_calls: int
@@ -64,19 +73,24 @@ class Classification:
 class DTWClassifier:
     """k-NN DTW classifier over labelled trajectory templates (see the module docstring)."""
 
-    def __init__(self, config: FeatureConfig = FeatureConfig(), window: float = 0.25, k: int = 1,
-                 reject_distance: Optional[float] = None):
+    def __init__(
+        self,
+        config: FeatureConfig = FeatureConfig(),
+        window: float = 0.25,
+        k: int = 1,
+        reject_distance: float | None = None,
+    ):
         self.config = config
         self.window_fraction = window
         self.k = int(k)
         self.reject_distance = reject_distance
-        self.labels: List[str] = []
+        self.labels: list[str] = []
         self._data = np.zeros((0, config.length, config.channels))
         self._upper = self._data
         self._lower = self._data
 
     @classmethod
-    def from_params(cls, values: Optional[dict] = None, source: str = "dtw_classifier") -> "DTWClassifier":
+    def from_params(cls, values: dict | None = None, source: str = "dtw_classifier") -> "DTWClassifier":
         """Classifier from a parameter dict validated by CLASSIFIER_PARAMS."""
         checked = CLASSIFIER_PARAMS.validate(values or {}, source)
         feature_keys = set(FEATURE_PARAMS.params)
@@ -84,14 +98,14 @@ class DTWClassifier:
         return cls(config, checked["window"], checked["k"], checked["reject_distance"])
 
     @property
-    def window(self) -> Optional[int]:
+    def window(self) -> int | None:
         """Sakoe-Chiba width in samples for dtaidistance (None = unconstrained)."""
         if self.window_fraction >= 1.0:
             return None
         return max(1, int(round(self.window_fraction * self.config.length)))
 
     @property
-    def classes(self) -> List[str]:
+    def classes(self) -> list[str]:
         """Sorted distinct labels."""
         return sorted(set(self.labels))
 
@@ -106,7 +120,7 @@ class DTWClassifier:
         """Add one template (a path n x 3, optional times)."""
         self.add_features([label], [self.features(points, times)])
 
-    def fit(self, samples: Iterable[Tuple[str, np.ndarray, Optional[np.ndarray]]]) -> "DTWClassifier":
+    def fit(self, samples: Iterable[tuple[str, np.ndarray, np.ndarray | None]]) -> "DTWClassifier":
         """Add every (label, points, times) template; returns self."""
         labels, feats = [], []
         for label, points, times in samples:
@@ -152,8 +166,9 @@ class DTWClassifier:
     def dtw(self, a: np.ndarray, b: np.ndarray, max_dist: float = np.inf) -> float:
         """Windowed multi-dimensional DTW (dtaidistance C core); inf once above max_dist."""
         if _DTW_CC is None:
-            return dtw_ndim.distance_fast(a, b, window=self.window,
-                                          max_dist=None if not np.isfinite(max_dist) else max_dist)
+            return dtw_ndim.distance_fast(
+                a, b, window=self.window, max_dist=None if not np.isfinite(max_dist) else max_dist
+            )
         return _DTW_CC.distance_ndim(a, b, **self._dtw_kwargs(max_dist))
 
     @property
@@ -170,8 +185,8 @@ class DTWClassifier:
         count = min(max(1, count), len(self.labels))
         bounds = self.lower_bounds(query)
         order = np.argsort(bounds, kind="stable")
-        best: List[Tuple[float, int]] = []
-        per_class: Dict[str, float] = {}
+        best: list[tuple[float, int]] = []
+        per_class: dict[str, float] = {}
         threshold = np.inf
         calls = 0
         base = self._c_kwargs
@@ -198,16 +213,16 @@ class DTWClassifier:
             threshold = max(kth, two[1] if len(two) == 2 else np.inf)
         return best, per_class, calls
 
-    def classify(self, points, times=None, open_set: Optional[bool] = None) -> Classification:
+    def classify(self, points, times=None, open_set: bool | None = None) -> Classification:
         """Classify one path. ``open_set`` defaults to "a rejection threshold is set"."""
         return self.classify_features(self.features(points, times), open_set)
 
-    def classify_features(self, query: np.ndarray, open_set: Optional[bool] = None) -> Classification:
+    def classify_features(self, query: np.ndarray, open_set: bool | None = None) -> Classification:
         """Classify a feature array (see ``classify``)."""
         scale = np.sqrt(self.config.length)
         best, per_class, calls = self.scan(query, self.k)
         if self.k > 1:  # distance-weighted vote: the nearest counts 1, the others d_1 / d_i
-            votes: Dict[str, float] = {}
+            votes: dict[str, float] = {}
             nearest = max(best[0][0], 1e-12)
             for dist, index in best:
                 label = self.labels[index]
@@ -221,8 +236,16 @@ class DTWClassifier:
         confidence = 1.0 if not np.isfinite(d_other) else max(0.0, (d_other - d_best) / max(d_other, 1e-12))
         open_set = self.reject_distance is not None if open_set is None else open_set
         rejected = bool(open_set and self.reject_distance is not None and d_best > self.reject_distance)
-        return Classification(None if rejected else winner, float(d_best), float(confidence), winner, runner_up,
-                              float(d_other), rejected, calls)
+        return Classification(
+            None if rejected else winner,
+            float(d_best),
+            float(confidence),
+            winner,
+            runner_up,
+            float(d_other),
+            rejected,
+            calls,
+        )
 
     def calibrate_rejection(self, percentile: float = 99.0, margin: float = 1.3) -> float:
         """Set ``reject_distance`` from the templates themselves: the ``percentile`` of each

@@ -24,27 +24,36 @@ leave-subjects-out inside the training halves of the hard synthetic letters and 
 
 Everything is numpy; the result is C-contiguous float64, ready for dtaidistance.
 """
+
 from dataclasses import dataclass, field
-from typing import Optional, Tuple
 
 import numpy as np
 
 from motion_common.params import Param, ParamSchema
 
-FEATURE_PARAMS = ParamSchema([
-    Param("length", 48, "points", "samples per normalised path", low=8, high=512),
-    Param("resample", "arc", "", "resampling: equal arc length or equal time", choices=("arc", "time")),
-    Param("smooth", 3, "samples", "moving-average width before resampling (1 = none)", low=1, high=31),
-    Param("position_weight", 1.0, "", "weight of the normalised position channels", low=0.0),
-    Param("direction_weight", 0.6, "", "weight of the unit direction-of-travel channels", low=0.0),
-    Param("curvature_weight", 0.0, "", "weight of the turning-angle channel (rad per step)", low=0.0),
-    Param("axis_weights", [1.0, 1.0, 0.5], "", "per-axis weight after normalisation (damp depth)",
-          length=3, low=0.0),
-    Param("plane", "none", "", "'align': turn the best-fit (PCA) plane of a flat path to face +z",
-          choices=("none", "align")),
-    Param("scale", "rms", "", "size normalisation: RMS radius or largest bounding-box side",
-          choices=("rms", "bbox")),
-])
+FEATURE_PARAMS = ParamSchema(
+    [
+        Param("length", 48, "points", "samples per normalised path", low=8, high=512),
+        Param("resample", "arc", "", "resampling: equal arc length or equal time", choices=("arc", "time")),
+        Param("smooth", 3, "samples", "moving-average width before resampling (1 = none)", low=1, high=31),
+        Param("position_weight", 1.0, "", "weight of the normalised position channels", low=0.0),
+        Param("direction_weight", 0.6, "", "weight of the unit direction-of-travel channels", low=0.0),
+        Param("curvature_weight", 0.0, "", "weight of the turning-angle channel (rad per step)", low=0.0),
+        Param(
+            "axis_weights", [1.0, 1.0, 0.5], "", "per-axis weight after normalisation (damp depth)", length=3, low=0.0
+        ),
+        Param(
+            "plane",
+            "none",
+            "",
+            "'align': turn the best-fit (PCA) plane of a flat path to face +z",
+            choices=("none", "align"),
+        ),
+        Param(
+            "scale", "rms", "", "size normalisation: RMS radius or largest bounding-box side", choices=("rms", "bbox")
+        ),
+    ]
+)
 
 
 @dataclass(frozen=True)
@@ -57,12 +66,12 @@ class FeatureConfig:
     position_weight: float = 1.0
     direction_weight: float = 0.6
     curvature_weight: float = 0.0
-    axis_weights: Tuple[float, float, float] = field(default=(1.0, 1.0, 0.5))
+    axis_weights: tuple[float, float, float] = field(default=(1.0, 1.0, 0.5))
     plane: str = "none"
     scale: str = "rms"
 
     @classmethod
-    def from_params(cls, values: Optional[dict] = None, source: str = "features") -> "FeatureConfig":
+    def from_params(cls, values: dict | None = None, source: str = "features") -> "FeatureConfig":
         """Validated config from a parameter dict (FEATURE_PARAMS)."""
         checked = FEATURE_PARAMS.validate(values or {}, source)
         checked["axis_weights"] = tuple(checked["axis_weights"])
@@ -112,8 +121,9 @@ def resample(points: np.ndarray, length: int, mode: str = "arc", times=None) -> 
     return np.column_stack([np.interp(target, axis, points[:, i]) for i in range(3)])
 
 
-def align_plane(path: np.ndarray, min_flatness: float = 0.15, max_thickness: float = 0.3,
-                max_tilt: float = np.radians(50.0)) -> np.ndarray:
+def align_plane(
+    path: np.ndarray, min_flatness: float = 0.15, max_thickness: float = 0.3, max_tilt: float = np.radians(50.0)
+) -> np.ndarray:
     """A centred path turned by the smallest rotation that brings the normal of its best-fit
     (PCA) plane onto +z (the normal's sign chosen toward +z), so a letter written on a
     tilted plane faces the device again; in-plane orientation is kept. Paths that are not
@@ -149,7 +159,7 @@ def normalise(points, times=None, config: FeatureConfig = FeatureConfig()) -> np
     if config.scale == "bbox":
         radius = 0.5 * float(np.max(path.max(axis=0) - path.min(axis=0)))
     else:
-        radius = np.sqrt(np.mean(np.sum(path ** 2, axis=1)))
+        radius = np.sqrt(np.mean(np.sum(path**2, axis=1)))
     if radius > 0:
         path = path / radius
     return path * np.asarray(config.axis_weights)

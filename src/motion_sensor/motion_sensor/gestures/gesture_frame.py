@@ -10,15 +10,15 @@ confidence in [0, 1] and the stamp of the frame that completed it.
 ``leap_v6``) into GestureFrames, and ``frame_from_sample`` a HandSample (what a
 motion_sensor/hand message carries) into one.
 """
+
 import gzip
 from dataclasses import dataclass
-from typing import List, Optional
 
 import numpy as np
 
+from motion_sensor.devices.leap_v6 import frame_to_sample, parse_message
 from motion_sensor.errors import MotionSensorError
 from motion_sensor.hand_sample import UNKNOWN, HandSample
-from motion_sensor.devices.leap_v6 import frame_to_sample, parse_message
 
 
 @dataclass
@@ -30,7 +30,7 @@ class GestureFrame:
     grab: float = UNKNOWN
     pinch: float = UNKNOWN
     hands_num: int = 1
-    index_tip: Optional[np.ndarray] = None
+    index_tip: np.ndarray | None = None
 
     def point(self, source: str = "palm") -> np.ndarray:
         """The tracked point: "palm", or "index" (the palm when the tip is unknown)."""
@@ -47,18 +47,22 @@ class GestureEvent:
     name: str
     confidence: float
     stamp: float
-    info: Optional[dict] = None
+    info: dict | None = None
 
 
 def frame_from_sample(sample: HandSample) -> GestureFrame:
     """GestureFrame of a HandSample: palm, grab, pinch, hands and the index tip."""
-    return GestureFrame(stamp=sample.stamp, palm=np.asarray(sample.position, dtype=float),
-                        grab=float(sample.grab_strength), pinch=float(sample.pinch_strength),
-                        hands_num=int(sample.hands_num),
-                        index_tip=None if sample.index_tip is None else np.asarray(sample.index_tip, dtype=float))
+    return GestureFrame(
+        stamp=sample.stamp,
+        palm=np.asarray(sample.position, dtype=float),
+        grab=float(sample.grab_strength),
+        pinch=float(sample.pinch_strength),
+        hands_num=int(sample.hands_num),
+        index_tip=None if sample.index_tip is None else np.asarray(sample.index_tip, dtype=float),
+    )
 
 
-def frame_from_json(line, stamp: Optional[float] = None, preference: str = "right") -> Optional[GestureFrame]:
+def frame_from_json(line, stamp: float | None = None, preference: str = "right") -> GestureFrame | None:
     """GestureFrame of one Leap v6 message (JSON text), or None for a frame without a hand
     or a non-frame message; ``stamp`` defaults to the device clock (s). Raises
     MotionSensorError on a malformed frame."""
@@ -69,7 +73,7 @@ def frame_from_json(line, stamp: Optional[float] = None, preference: str = "righ
     return None if sample is None else frame_from_sample(sample)
 
 
-def frames_from_recording(path: str, preference: str = "right") -> List[GestureFrame]:
+def frames_from_recording(path: str, preference: str = "right") -> list[GestureFrame]:
     """Every frame with a hand of a Leap v6 recording, stamped with the device clock (s).
     Malformed lines are skipped (as ``leap_v6.read_recording`` does)."""
     opener = gzip.open if path.endswith(".gz") else open

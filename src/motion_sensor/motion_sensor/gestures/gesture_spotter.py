@@ -24,37 +24,44 @@ in ``last_segment`` (the teach mode and ``record_gesture`` cut templates with it
 Speed is the displacement over ``speed_window_s`` divided by its duration. A gap longer
 than ``max_gap_s`` (hand lost) drops the current segment.
 """
+
 from collections import deque
 from dataclasses import dataclass
-from typing import Deque, List, Optional
 
 import numpy as np
 
 from motion_common.params import Param, ParamSchema, check_ordered
-
 from motion_sensor.gestures.dtw_classifier import Classification, DTWClassifier
 from motion_sensor.gestures.gesture_frame import GestureEvent, GestureFrame
 
 MAX_KEPT_SEGMENTS = 200  # the newest segments kept for inspection; a node runs for hours
 
-SPOTTER_PARAMS = ParamSchema([
-    Param("mode", "speed", "", "segmentation: speed/pause or a held clutch pose", choices=("speed", "clutch")),
-    Param("source", "palm", "", "tracked point", choices=("palm", "index")),
-    Param("start_speed", 0.25, "m/s", "speed that starts a segment after a pause", low=0.0, low_open=True),
-    Param("stop_speed", 0.08, "m/s", "speed under which the point rests", low=0.0, low_open=True),
-    Param("pause_s", 0.2, "s", "rest that arms the spotter and ends a segment", low=0.0, low_open=True),
-    Param("min_duration_s", 0.2, "s", "shorter segments are ignored", low=0.0),
-    Param("max_duration_s", 2.5, "s", "longer motion is abandoned (not a gesture)", low=0.0, low_open=True),
-    Param("min_extent_m", 0.06, "m", "segments with a smaller bounding-box diagonal are ignored", low=0.0),
-    Param("clutch", "pinch", "", "clutch pose in clutch mode", choices=("pinch", "grab")),
-    Param("clutch_on", 0.8, "", "strength that engages the clutch", low=0.0, high=1.0),
-    Param("clutch_off", 0.6, "", "strength under which the clutch releases", low=0.0, high=1.0),
-    Param("clutch_max_grab", 0.6, "", "pinch clutch: a grab this strong is a fist, not a pinch (Leap reports "
-          "a fist as pinched too)", low=0.0, high=1.0),
-    Param("speed_window_s", 0.05, "s", "window of the speed estimate", low=0.0, low_open=True),
-    Param("max_gap_s", 0.25, "s", "a longer frame gap drops the segment", low=0.0, low_open=True),
-    Param("min_confidence", 0.0, "", "reject labels with a smaller margin to the next class", low=0.0, high=1.0),
-])
+SPOTTER_PARAMS = ParamSchema(
+    [
+        Param("mode", "speed", "", "segmentation: speed/pause or a held clutch pose", choices=("speed", "clutch")),
+        Param("source", "palm", "", "tracked point", choices=("palm", "index")),
+        Param("start_speed", 0.25, "m/s", "speed that starts a segment after a pause", low=0.0, low_open=True),
+        Param("stop_speed", 0.08, "m/s", "speed under which the point rests", low=0.0, low_open=True),
+        Param("pause_s", 0.2, "s", "rest that arms the spotter and ends a segment", low=0.0, low_open=True),
+        Param("min_duration_s", 0.2, "s", "shorter segments are ignored", low=0.0),
+        Param("max_duration_s", 2.5, "s", "longer motion is abandoned (not a gesture)", low=0.0, low_open=True),
+        Param("min_extent_m", 0.06, "m", "segments with a smaller bounding-box diagonal are ignored", low=0.0),
+        Param("clutch", "pinch", "", "clutch pose in clutch mode", choices=("pinch", "grab")),
+        Param("clutch_on", 0.8, "", "strength that engages the clutch", low=0.0, high=1.0),
+        Param("clutch_off", 0.6, "", "strength under which the clutch releases", low=0.0, high=1.0),
+        Param(
+            "clutch_max_grab",
+            0.6,
+            "",
+            "pinch clutch: a grab this strong is a fist, not a pinch (Leap reports a fist as pinched too)",
+            low=0.0,
+            high=1.0,
+        ),
+        Param("speed_window_s", 0.05, "s", "window of the speed estimate", low=0.0, low_open=True),
+        Param("max_gap_s", 0.25, "s", "a longer frame gap drops the segment", low=0.0, low_open=True),
+        Param("min_confidence", 0.0, "", "reject labels with a smaller margin to the next class", low=0.0, high=1.0),
+    ]
+)
 
 
 @dataclass
@@ -64,7 +71,7 @@ class Segment:
 
     stamps: np.ndarray
     points: np.ndarray
-    classification: Optional[Classification]
+    classification: Classification | None
     accepted: bool
     reason: str = ""
 
@@ -76,25 +83,26 @@ class Segment:
 class GestureSpotter:
     """Segments a hand stream and classifies the segments (see the module docstring)."""
 
-    def __init__(self, classifier: Optional[DTWClassifier] = None, params: Optional[dict] = None,
-                 source: str = "gesture_spotter"):
+    def __init__(
+        self, classifier: DTWClassifier | None = None, params: dict | None = None, source: str = "gesture_spotter"
+    ):
         self.params = SPOTTER_PARAMS.validate(params or {}, source)
         check_ordered(self.params, [("clutch_off", "clutch_on"), ("stop_speed", "start_speed")], source)
         self.classifier = classifier
-        self.last_segment: Optional[Segment] = None
+        self.last_segment: Segment | None = None
         # The latest segments (bounded: a node runs for hours), for record_gesture and tests.
-        self.segments: Deque[Segment] = deque(maxlen=MAX_KEPT_SEGMENTS)
+        self.segments: deque[Segment] = deque(maxlen=MAX_KEPT_SEGMENTS)
         self.speed = float("nan")
         self._reset_state()
 
     def _reset_state(self):
-        self._history: Deque = deque()   # (stamp, point) for the speed estimate
-        self._recent: Deque = deque()    # (stamp, point, speed) since the last rest
-        self._rest_since: Optional[float] = None
+        self._history: deque = deque()  # (stamp, point) for the speed estimate
+        self._recent: deque = deque()  # (stamp, point, speed) since the last rest
+        self._rest_since: float | None = None
         self._armed = False
-        self._recording: List = []
+        self._recording: list = []
         self._clutched = False
-        self._last_stamp: Optional[float] = None
+        self._last_stamp: float | None = None
 
     @property
     def recording(self) -> bool:
@@ -115,11 +123,12 @@ class GestureSpotter:
             return 0.0
         return float(np.linalg.norm(point - first_point) / (stamp - first_stamp))
 
-    def update(self, frame: GestureFrame) -> List[GestureEvent]:
+    def update(self, frame: GestureFrame) -> list[GestureEvent]:
         """Feed one frame; return the gesture events it completes."""
         stamp = float(frame.stamp)
-        if self._last_stamp is not None and (stamp - self._last_stamp > self.params["max_gap_s"]
-                                             or stamp < self._last_stamp):
+        if self._last_stamp is not None and (
+            stamp - self._last_stamp > self.params["max_gap_s"] or stamp < self._last_stamp
+        ):
             self._reset_state()
         if frame.hands_num < 1:
             self._reset_state()
@@ -132,7 +141,7 @@ class GestureSpotter:
             return self._update_clutch(frame, stamp, point)
         return self._update_speed(stamp, point, speed)
 
-    def _update_speed(self, stamp, point, speed) -> List[GestureEvent]:
+    def _update_speed(self, stamp, point, speed) -> list[GestureEvent]:
         p = self.params
         resting = speed < p["stop_speed"]
         if resting:
@@ -168,7 +177,7 @@ class GestureSpotter:
             self._armed = False
         return []
 
-    def _update_clutch(self, frame, stamp, point) -> List[GestureEvent]:
+    def _update_clutch(self, frame, stamp, point) -> list[GestureEvent]:
         p = self.params
         strength = frame.pinch if p["clutch"] == "pinch" else frame.grab
         if p["clutch"] == "pinch" and frame.grab >= p["clutch_max_grab"]:
@@ -199,7 +208,7 @@ class GestureSpotter:
                 self.last_segment = Segment(np.array([]), np.zeros((0, 3)), None, False, "too long")
         return []
 
-    def _finish(self, items, stamp) -> List[GestureEvent]:
+    def _finish(self, items, stamp) -> list[GestureEvent]:
         p = self.params
         stamps = np.array([s for s, _ in items], dtype=float)
         points = np.array([q for _, q in items], dtype=float).reshape(-1, 3)
@@ -224,6 +233,16 @@ class GestureSpotter:
             segment.reason = f"rejected: ambiguous ({result.candidate} vs {result.runner_up})"
             return []
         segment.accepted = True
-        return [GestureEvent(result.label, result.confidence, stamp,
-                             {"distance": result.distance, "start": float(stamps[0]),
-                              "duration_s": segment.duration, "runner_up": result.runner_up})]
+        return [
+            GestureEvent(
+                result.label,
+                result.confidence,
+                stamp,
+                {
+                    "distance": result.distance,
+                    "start": float(stamps[0]),
+                    "duration_s": segment.duration,
+                    "runner_up": result.runner_up,
+                },
+            )
+        ]

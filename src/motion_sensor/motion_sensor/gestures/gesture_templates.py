@@ -23,15 +23,14 @@ Evaluation dataset (``load_dataset``)::
 The subject is the first folder under ``<dir>``, the label the file stem (a trailing
 ``_<n>`` or ``-<n>`` repetition suffix is *not* stripped: name files by label).
 """
+
 import os
 import re
 from dataclasses import dataclass, field
-from typing import List, Optional, Tuple
 
 import numpy as np
 
 from motion_common.atomic_file import write_atomic
-
 from motion_sensor.errors import MotionSensorError
 
 LABEL_RE = re.compile(r"^[A-Za-z0-9_\-]+$")
@@ -47,7 +46,7 @@ class PathFile:
     points: np.ndarray
     times: np.ndarray
     subject: str = ""
-    skipped: List[str] = field(default_factory=list)
+    skipped: list[str] = field(default_factory=list)
 
 
 def read_path(path: str, label: str = "", subject: str = "") -> PathFile:
@@ -75,8 +74,9 @@ def read_path(path: str, label: str = "", subject: str = "") -> PathFile:
     except OSError as exc:
         raise MotionSensorError(f"cannot read gesture file {path}: {exc}") from None
     data = np.array(rows, dtype=float).reshape(-1, 4)
-    return PathFile(path, label or os.path.splitext(os.path.basename(path))[0], data[:, :3], data[:, 3],
-                    subject, skipped)
+    return PathFile(
+        path, label or os.path.splitext(os.path.basename(path))[0], data[:, :3], data[:, 3], subject, skipped
+    )
 
 
 def format_path(points, times, comment: str = "") -> str:
@@ -109,7 +109,7 @@ def save_template(folder: str, label: str, points_mm, times_ms, comment: str = "
     return path
 
 
-def load_templates(folder: str, min_points: int = 5) -> Tuple[List[PathFile], List[str]]:
+def load_templates(folder: str, min_points: int = 5) -> tuple[list[PathFile], list[str]]:
     """Every template of ``<folder>/<label>/*.csv``: (files, problems). Files with fewer
     than ``min_points`` valid rows are left out and listed in the problems."""
     if not os.path.isdir(folder):
@@ -131,7 +131,7 @@ def load_templates(folder: str, min_points: int = 5) -> Tuple[List[PathFile], Li
     return files, problems
 
 
-def load_dataset(folder: str, min_points: int = 5) -> Tuple[List[PathFile], List[str]]:
+def load_dataset(folder: str, min_points: int = 5) -> tuple[list[PathFile], list[str]]:
     """Every ``<folder>/<subject>/**/<label>.csv``: (files, problems) as load_templates."""
     if not os.path.isdir(folder):
         raise MotionSensorError(f"dataset folder {folder} does not exist")
@@ -156,11 +156,11 @@ def load_dataset(folder: str, min_points: int = 5) -> Tuple[List[PathFile], List
     return files, problems
 
 
-def subjects_of(files: List[PathFile]) -> List[str]:
+def subjects_of(files: list[PathFile]) -> list[str]:
     """Sorted distinct subjects."""
     return sorted({f.subject for f in files})
 
 
-def templates_to_samples(files: List[PathFile]) -> List[Tuple[str, np.ndarray, Optional[np.ndarray]]]:
+def templates_to_samples(files: list[PathFile]) -> list[tuple[str, np.ndarray, np.ndarray | None]]:
     """(label, points, times) triples for DTWClassifier.fit."""
     return [(f.label, f.points, f.times) for f in files]

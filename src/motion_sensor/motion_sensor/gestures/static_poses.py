@@ -30,33 +30,36 @@ which averages the tracker's sub-millimetre jitter away. The defaults come from 
 Leap recordings in tests/data: a hand "held still" there drifts at 15-45 mm/s (0.3 s
 windows), hence still_speed 0.05 m/s; deliberate motion is 0.2 m/s and more.
 """
+
 from collections import deque
-from typing import Deque, List, Optional, Tuple
 
 import numpy as np
 
 from motion_common.params import Param, ParamSchema, check_ordered
-
 from motion_sensor.gestures.gesture_frame import GestureEvent, GestureFrame
 
-STATIC_PARAMS = ParamSchema([
-    Param("grab_on", 0.8, "", "grab strength that starts a fist", low=0.0, high=1.0),
-    Param("grab_off", 0.5, "", "grab strength under which a fist ends (hysteresis)", low=0.0, high=1.0),
-    Param("fist_dwell_s", 0.25, "s", "time the fist must be held", low=0.0),
-    Param("pinch_on", 0.85, "", "pinch strength that starts a pinch", low=0.0, high=1.0),
-    Param("pinch_off", 0.6, "", "pinch strength under which a pinch ends", low=0.0, high=1.0),
-    Param("pinch_max_grab", 0.6, "", "a pinch needs grab below this (else it is a fist)", low=0.0, high=1.0),
-    Param("pinch_dwell_s", 0.2, "s", "time the pinch must be held", low=0.0),
-    Param("open_on", 0.1, "", "grab and pinch at most this for an open palm", low=0.0, high=1.0),
-    Param("open_off", 0.3, "", "open palm ends when grab or pinch exceeds this", low=0.0, high=1.0),
-    Param("open_dwell_s", 0.5, "s", "time the open palm must be held", low=0.0),
-    Param("second_hand_dwell_s", 0.3, "s", "time a second hand must be seen", low=0.0),
-    Param("still_speed", 0.05, "m/s", "palm speed under which the hand counts as still", low=0.0, low_open=True),
-    Param("still_release_speed", 0.1, "m/s", "palm speed that ends hold_still (hysteresis)", low=0.0, low_open=True),
-    Param("still_time_s", 1.0, "s", "time the palm must stay still for hold_still", low=0.0, low_open=True),
-    Param("speed_window_s", 0.25, "s", "window over which the palm speed is measured", low=0.0, low_open=True),
-    Param("max_gap_s", 0.25, "s", "a longer gap between frames means the hand was lost", low=0.0, low_open=True),
-])
+STATIC_PARAMS = ParamSchema(
+    [
+        Param("grab_on", 0.8, "", "grab strength that starts a fist", low=0.0, high=1.0),
+        Param("grab_off", 0.5, "", "grab strength under which a fist ends (hysteresis)", low=0.0, high=1.0),
+        Param("fist_dwell_s", 0.25, "s", "time the fist must be held", low=0.0),
+        Param("pinch_on", 0.85, "", "pinch strength that starts a pinch", low=0.0, high=1.0),
+        Param("pinch_off", 0.6, "", "pinch strength under which a pinch ends", low=0.0, high=1.0),
+        Param("pinch_max_grab", 0.6, "", "a pinch needs grab below this (else it is a fist)", low=0.0, high=1.0),
+        Param("pinch_dwell_s", 0.2, "s", "time the pinch must be held", low=0.0),
+        Param("open_on", 0.1, "", "grab and pinch at most this for an open palm", low=0.0, high=1.0),
+        Param("open_off", 0.3, "", "open palm ends when grab or pinch exceeds this", low=0.0, high=1.0),
+        Param("open_dwell_s", 0.5, "s", "time the open palm must be held", low=0.0),
+        Param("second_hand_dwell_s", 0.3, "s", "time a second hand must be seen", low=0.0),
+        Param("still_speed", 0.05, "m/s", "palm speed under which the hand counts as still", low=0.0, low_open=True),
+        Param(
+            "still_release_speed", 0.1, "m/s", "palm speed that ends hold_still (hysteresis)", low=0.0, low_open=True
+        ),
+        Param("still_time_s", 1.0, "s", "time the palm must stay still for hold_still", low=0.0, low_open=True),
+        Param("speed_window_s", 0.25, "s", "window over which the palm speed is measured", low=0.0, low_open=True),
+        Param("max_gap_s", 0.25, "s", "a longer gap between frames means the hand was lost", low=0.0, low_open=True),
+    ]
+)
 
 POSES = ("fist", "pinch", "open_palm", "second_hand", "hold_still")
 
@@ -68,16 +71,15 @@ class _Pose:
     def __init__(self, name: str, dwell: float):
         self.name, self.dwell = name, dwell
         self.active = False
-        self.since: Optional[float] = None
-        self.scores: List[float] = []
+        self.since: float | None = None
+        self.scores: list[float] = []
 
-    def reset(self, stamp: float, events: List[GestureEvent]) -> None:
+    def reset(self, stamp: float, events: list[GestureEvent]) -> None:
         if self.active:
             events.append(GestureEvent(self.name + "_end", 1.0, stamp))
         self.active, self.since, self.scores = False, None, []
 
-    def update(self, on: Optional[bool], off: Optional[bool], score: float, stamp: float,
-               events: List[GestureEvent]) -> None:
+    def update(self, on: bool | None, off: bool | None, score: float, stamp: float, events: list[GestureEvent]) -> None:
         """``on``/``off`` None = unknown (state kept, dwell restarted)."""
         if on is None or off is None:
             self.since, self.scores = None, []
@@ -102,25 +104,40 @@ class _Pose:
 class StaticPoseDetector:
     """Static poses and hold-still from a stream of GestureFrames (see module docstring)."""
 
-    def __init__(self, params: Optional[dict] = None, source: str = "static_poses"):
+    def __init__(self, params: dict | None = None, source: str = "static_poses"):
         p = STATIC_PARAMS.validate(params or {}, source)
-        check_ordered(p, [("grab_off", "grab_on"), ("pinch_off", "pinch_on"), ("open_on", "open_off"),
-                          ("still_speed", "still_release_speed")], source)
+        check_ordered(
+            p,
+            [
+                ("grab_off", "grab_on"),
+                ("pinch_off", "pinch_on"),
+                ("open_on", "open_off"),
+                ("still_speed", "still_release_speed"),
+            ],
+            source,
+        )
         self.params = p
-        self._poses = {name: _Pose(name, p[key]) for name, key in (
-            ("fist", "fist_dwell_s"), ("pinch", "pinch_dwell_s"), ("open_palm", "open_dwell_s"),
-            ("second_hand", "second_hand_dwell_s"), ("hold_still", "still_time_s"))}
-        self._history: Deque[Tuple[float, np.ndarray]] = deque()
-        self._last_stamp: Optional[float] = None
+        self._poses = {
+            name: _Pose(name, p[key])
+            for name, key in (
+                ("fist", "fist_dwell_s"),
+                ("pinch", "pinch_dwell_s"),
+                ("open_palm", "open_dwell_s"),
+                ("second_hand", "second_hand_dwell_s"),
+                ("hold_still", "still_time_s"),
+            )
+        }
+        self._history: deque[tuple[float, np.ndarray]] = deque()
+        self._last_stamp: float | None = None
         self.speed = float("nan")
 
-    def active(self) -> List[str]:
+    def active(self) -> list[str]:
         """Names of the poses active now."""
         return [name for name, pose in self._poses.items() if pose.active]
 
-    def reset(self, stamp: float) -> List[GestureEvent]:
+    def reset(self, stamp: float) -> list[GestureEvent]:
         """Hand lost at ``stamp``: end every active pose (their ``_end`` events)."""
-        events: List[GestureEvent] = []
+        events: list[GestureEvent] = []
         for pose in self._poses.values():
             pose.reset(stamp, events)
         self._history.clear()
@@ -128,7 +145,7 @@ class StaticPoseDetector:
         self.speed = float("nan")
         return events
 
-    def _palm_speed(self, stamp: float, palm: np.ndarray) -> Optional[float]:
+    def _palm_speed(self, stamp: float, palm: np.ndarray) -> float | None:
         self._history.append((stamp, palm))
         window = self.params["speed_window_s"]
         while len(self._history) > 2 and stamp - self._history[1][0] >= window:
@@ -138,10 +155,10 @@ class StaticPoseDetector:
             return None  # not enough history yet
         return float(np.linalg.norm(palm - first_palm) / (stamp - first_stamp))
 
-    def update(self, frame: GestureFrame) -> List[GestureEvent]:
+    def update(self, frame: GestureFrame) -> list[GestureEvent]:
         """Feed one frame; return the events it completes (often none)."""
         p = self.params
-        events: List[GestureEvent] = []
+        events: list[GestureEvent] = []
         stamp = float(frame.stamp)
         if self._last_stamp is not None and (stamp - self._last_stamp > p["max_gap_s"] or stamp < self._last_stamp):
             events.extend(self.reset(stamp))
@@ -180,6 +197,11 @@ class StaticPoseDetector:
             still.update(None, None, 0.0, stamp, events)
         else:
             self.speed = speed
-            still.update(speed < p["still_speed"], speed > p["still_release_speed"],
-                         1.0 - speed / p["still_speed"], stamp, events)
+            still.update(
+                speed < p["still_speed"],
+                speed > p["still_release_speed"],
+                1.0 - speed / p["still_speed"],
+                stamp,
+                events,
+            )
         return events

@@ -9,6 +9,7 @@ fractions of each path's (smoothed) arc length, which does not depend on the unk
 transform nor on the speeds; DTW passes then align the positions themselves, once the
 current estimate has mapped the hand path into robot space, and refine the fit.
 """
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,9 +42,13 @@ class Registration:
 
     def to_dict(self) -> dict:
         """YAML-ready dict (units: m, unitless scale and ratio, rotation as a matrix)."""
-        return {"rotation": self.rotation.round(12).tolist(), "translation_m": self.translation.round(12).tolist(),
-                "scale": float(self.scale), "speed_reduction": float(self.speed_reduction),
-                "rms_error_m": float(self.rms_error)}
+        return {
+            "rotation": self.rotation.round(12).tolist(),
+            "translation_m": self.translation.round(12).tolist(),
+            "scale": float(self.scale),
+            "speed_reduction": float(self.speed_reduction),
+            "rms_error_m": float(self.rms_error),
+        }
 
     def save(self, path: str) -> None:
         """Write the registration as YAML."""
@@ -65,10 +70,14 @@ class Registration:
             scale = float(data.get("scale", 1.0))
             speed = float(data.get("speed_reduction", 1.0))
         except (TypeError, KeyError, ValueError) as exc:
-            raise MotionSensorError(f"{path}: registration needs rotation (3x3), translation_m (3), "
-                                    f"scale, speed_reduction: {exc}") from None
-        if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) \
-                or np.linalg.det(rotation) < 0:
+            raise MotionSensorError(
+                f"{path}: registration needs rotation (3x3), translation_m (3), scale, speed_reduction: {exc}"
+            ) from None
+        if (
+            rotation.shape != (3, 3)
+            or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6)
+            or np.linalg.det(rotation) < 0
+        ):
             raise MotionSensorError(f"{path}: 'rotation' is not a proper 3x3 rotation matrix")
         if translation.shape != (3,) or not scale > 0 or not speed > 0:
             raise MotionSensorError(f"{path}: translation_m needs 3 values, scale and speed_reduction > 0")
@@ -86,7 +95,7 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = True):
     if np.linalg.det(u) * np.linalg.det(vt) < 0:
         sign[2, 2] = -1.0  # a reflection is not a rotation
     rotation = u @ sign @ vt
-    variance = np.mean(np.sum(xs ** 2, axis=1))
+    variance = np.mean(np.sum(xs**2, axis=1))
     scale = float(np.trace(np.diag(singular) @ sign) / variance) if with_scale else 1.0
     return rotation, mu_t - scale * rotation @ mu_s, scale
 
@@ -110,8 +119,9 @@ def _arc_pairs(hand: np.ndarray, robot: np.ndarray, count: int = 200):
     return list(zip(hand_index, robot_index))
 
 
-def register(hand_points, robot_points, hand_times=None, robot_times=None, with_scale: bool = True,
-             iterations: int = 3) -> Registration:
+def register(
+    hand_points, robot_points, hand_times=None, robot_times=None, with_scale: bool = True, iterations: int = 3
+) -> Registration:
     """Register a hand path to a robot tool path of the same motion (any speeds).
 
     ``*_times`` (s) give the speed-reduction ratio (robot duration / hand duration);
@@ -138,7 +148,7 @@ def register(hand_points, robot_points, hand_times=None, robot_times=None, with_
     speed = 1.0
     if hand_times is not None and robot_times is not None:
         speed = float((robot_times[-1] - robot_times[0]) / (hand_times[-1] - hand_times[0]))
-    return Registration(rotation, translation, scale, speed, float(np.sqrt(np.mean(np.sum(residual ** 2, axis=1)))))
+    return Registration(rotation, translation, scale, speed, float(np.sqrt(np.mean(np.sum(residual**2, axis=1)))))
 
 
 def _fit(hand, robot, path, with_scale):

@@ -1,5 +1,6 @@
 """Pose filters of the sequencer. Positions are filtered in R^3, orientations on the unit
 sphere: quaternions are never averaged component-wise and published un-normalised."""
+
 import math
 from collections import deque
 
@@ -7,7 +8,6 @@ import numpy as np
 
 from motion_common.float_list import float_list
 from motion_common.params import Param, ParamSchema
-
 from motion_sensor.errors import MotionSensorError
 
 
@@ -169,13 +169,24 @@ class OneEuroFilter:
     # Defaults from bench/filter_bench.py on the real recordings: steadier than mean-10
     # with about a quarter of its lag on the tuning recordings, and steadier with about
     # half its lag on held-out ones (figures in bench/results/filter_bench.json).
-    def __init__(self, mincutoff: float = 3.0, beta: float = 1280.0, dcutoff: float = 1.0, beta_rot: float = 0.5,
-                 deadband: float = 0.0, speed_threshold: float = 0.08):
+    def __init__(
+        self,
+        mincutoff: float = 3.0,
+        beta: float = 1280.0,
+        dcutoff: float = 1.0,
+        beta_rot: float = 0.5,
+        deadband: float = 0.0,
+        speed_threshold: float = 0.08,
+    ):
         for name, value in (("mincutoff", mincutoff), ("dcutoff", dcutoff)):
             if not value > 0:
                 raise MotionSensorError(f"one_euro {name} must be > 0 Hz, got {value!r}")
-        for name, value in (("beta", beta), ("beta_rot", beta_rot), ("deadband", deadband),
-                            ("speed_threshold", speed_threshold)):
+        for name, value in (
+            ("beta", beta),
+            ("beta_rot", beta_rot),
+            ("deadband", deadband),
+            ("speed_threshold", speed_threshold),
+        ):
             if not value >= 0:
                 raise MotionSensorError(f"one_euro {name} must be >= 0, got {value!r}")
         self.mincutoff, self.beta, self.dcutoff, self.beta_rot = mincutoff, beta, dcutoff, beta_rot
@@ -240,8 +251,9 @@ def _gaussian_log_density(residual: np.ndarray, covariance: np.ndarray) -> float
     """log N(residual; 0, covariance) through a Cholesky factor."""
     factor = np.linalg.cholesky(covariance)
     whitened = np.linalg.solve(factor, residual)
-    return float(-0.5 * whitened @ whitened - np.sum(np.log(np.diag(factor)))
-                 - 0.5 * len(residual) * np.log(2.0 * np.pi))
+    return float(
+        -0.5 * whitened @ whitened - np.sum(np.log(np.diag(factor))) - 0.5 * len(residual) * np.log(2.0 * np.pi)
+    )
 
 
 _KALMAN_CLASS = None
@@ -295,9 +307,15 @@ class KalmanFilter:
     OneEuroFilter (``mincutoff``, ``beta_rot``).
     """
 
-    def __init__(self, process_noise: float = 1e-5, measurement_noise: float = 0.005,
-                 maneuver_process_noise: float = 10.0, switch_probability: float = 0.005,
-                 mincutoff: float = 1.0, beta_rot: float = 0.5):
+    def __init__(
+        self,
+        process_noise: float = 1e-5,
+        measurement_noise: float = 0.005,
+        maneuver_process_noise: float = 10.0,
+        switch_probability: float = 0.005,
+        mincutoff: float = 1.0,
+        beta_rot: float = 0.5,
+    ):
         if not process_noise > 0 or not measurement_noise > 0:
             raise MotionSensorError("kalman process_noise and measurement_noise must be > 0")
         if not maneuver_process_noise >= 0:
@@ -313,6 +331,7 @@ class KalmanFilter:
         # filterpy takes seconds to import (it pulls in scipy.stats): do it now, at start-up,
         # not on the first frame, where it would stall the stream and go stale.
         from filterpy.kalman import IMMEstimator
+
         self._imm_class = IMMEstimator
         self._model_class = _kalman_class()
         self.reset()
@@ -334,9 +353,9 @@ class KalmanFilter:
         for _ in self._noises:
             kf = self._model_class(dim_x=6, dim_z=3)
             kf.H = np.hstack([np.eye(3), np.zeros((3, 3))])
-            kf.R = np.eye(3) * self.measurement_noise ** 2
+            kf.R = np.eye(3) * self.measurement_noise**2
             kf.x = np.concatenate([position, np.zeros(3)])
-            kf.P = np.diag([self.measurement_noise ** 2] * 3 + [1.0] * 3)
+            kf.P = np.diag([self.measurement_noise**2] * 3 + [1.0] * 3)
             self._models.append(kf)
         self._imm = None
         if len(self._models) == 2:
@@ -359,7 +378,7 @@ class KalmanFilter:
         transition = np.eye(6)
         transition[:3, 3:] = np.eye(3) * dt
         # Continuous white-noise acceleration model discretised over this frame's dt.
-        block = np.array([[dt ** 3 / 3, dt ** 2 / 2], [dt ** 2 / 2, dt]])
+        block = np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]])
         for kf, q in zip(self._models, self._noises):
             kf.F = transition
             kf.Q = np.kron(block * q, np.eye(3))
@@ -381,25 +400,85 @@ FILTERS["kalman"] = KalmanFilter
 # Every filter's parameters with units and ranges: sequencer.yaml's ``filter_params`` is
 # checked against these (an unknown key stops the sequencer). The defaults are the
 # constructors' (a unit test keeps them equal).
-FILTER_PARAMS = ParamSchema([
-    Param("mean", {}, doc="MeanFilter", schema=ParamSchema([
-        Param("queue_size", 10, unit="frames", low=1, high=10000, doc="poses averaged"),
-    ])),
-    Param("one_euro", {}, doc="OneEuroFilter", schema=ParamSchema([
-        Param("mincutoff", 3.0, unit="Hz", low=0, low_open=True, doc="cutoff while slower than speed_threshold"),
-        Param("beta", 1280.0, unit="Hz per m/s", low=0, doc="cutoff growth with speed above speed_threshold"),
-        Param("dcutoff", 1.0, unit="Hz", low=0, low_open=True, doc="smoothing of the speed estimate"),
-        Param("beta_rot", 0.5, unit="Hz per rad/s", low=0, doc="cutoff growth with turn rate"),
-        Param("deadband", 0.0, unit="m", low=0, doc="hysteresis after the low-pass (0 = off)"),
-        Param("speed_threshold", 0.08, unit="m/s", low=0, doc="speed below which the cutoff stays at mincutoff"),
-    ])),
-    Param("kalman", {}, doc="KalmanFilter (IMM of a steady and a manoeuvring model)", schema=ParamSchema([
-        Param("process_noise", 1e-5, unit="m^2/s^3", low=0, low_open=True, doc="steady constant-velocity model"),
-        Param("measurement_noise", 0.005, unit="m", low=0, low_open=True, doc="what the steady model ignores"),
-        Param("maneuver_process_noise", 10.0, unit="m^2/s^3", low=0, doc="manoeuvring model (0 = single CV model)"),
-        Param("switch_probability", 0.005, unit="per frame", low=0, low_open=True, high=0.4999,
-              doc="between the two models"),
-        Param("mincutoff", 1.0, unit="Hz", low=0, low_open=True, doc="orientation low-pass cutoff"),
-        Param("beta_rot", 0.5, unit="Hz per rad/s", low=0, doc="orientation cutoff growth with turn rate"),
-    ])),
-])
+FILTER_PARAMS = ParamSchema(
+    [
+        Param(
+            "mean",
+            {},
+            doc="MeanFilter",
+            schema=ParamSchema(
+                [
+                    Param("queue_size", 10, unit="frames", low=1, high=10000, doc="poses averaged"),
+                ]
+            ),
+        ),
+        Param(
+            "one_euro",
+            {},
+            doc="OneEuroFilter",
+            schema=ParamSchema(
+                [
+                    Param(
+                        "mincutoff",
+                        3.0,
+                        unit="Hz",
+                        low=0,
+                        low_open=True,
+                        doc="cutoff while slower than speed_threshold",
+                    ),
+                    Param(
+                        "beta", 1280.0, unit="Hz per m/s", low=0, doc="cutoff growth with speed above speed_threshold"
+                    ),
+                    Param("dcutoff", 1.0, unit="Hz", low=0, low_open=True, doc="smoothing of the speed estimate"),
+                    Param("beta_rot", 0.5, unit="Hz per rad/s", low=0, doc="cutoff growth with turn rate"),
+                    Param("deadband", 0.0, unit="m", low=0, doc="hysteresis after the low-pass (0 = off)"),
+                    Param(
+                        "speed_threshold",
+                        0.08,
+                        unit="m/s",
+                        low=0,
+                        doc="speed below which the cutoff stays at mincutoff",
+                    ),
+                ]
+            ),
+        ),
+        Param(
+            "kalman",
+            {},
+            doc="KalmanFilter (IMM of a steady and a manoeuvring model)",
+            schema=ParamSchema(
+                [
+                    Param(
+                        "process_noise",
+                        1e-5,
+                        unit="m^2/s^3",
+                        low=0,
+                        low_open=True,
+                        doc="steady constant-velocity model",
+                    ),
+                    Param(
+                        "measurement_noise", 0.005, unit="m", low=0, low_open=True, doc="what the steady model ignores"
+                    ),
+                    Param(
+                        "maneuver_process_noise",
+                        10.0,
+                        unit="m^2/s^3",
+                        low=0,
+                        doc="manoeuvring model (0 = single CV model)",
+                    ),
+                    Param(
+                        "switch_probability",
+                        0.005,
+                        unit="per frame",
+                        low=0,
+                        low_open=True,
+                        high=0.4999,
+                        doc="between the two models",
+                    ),
+                    Param("mincutoff", 1.0, unit="Hz", low=0, low_open=True, doc="orientation low-pass cutoff"),
+                    Param("beta_rot", 0.5, unit="Hz per rad/s", low=0, doc="orientation cutoff growth with turn rate"),
+                ]
+            ),
+        ),
+    ]
+)

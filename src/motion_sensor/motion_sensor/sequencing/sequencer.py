@@ -16,53 +16,74 @@ Stages, in order, each counting what it drops (``counters``, by reason):
 7. filtering (mean, kalman or one_euro), then a continuity offset so that device switches
    and accepted jumps never make the output jump.
 """
+
 import math
 from collections import Counter, deque
 from dataclasses import dataclass, field
-from typing import Dict, Optional
 
 import numpy as np
 
-from motion_sensor.errors import MotionSensorError
-from motion_common.float_list import float_list
 from motion_common.errors import ParameterError
+from motion_common.float_list import float_list
 from motion_common.params import Param, ParamSchema
 from motion_common.rotations import is_unit_quaternion, multiply_quaternions, quaternion_norm
-
-from motion_sensor.sequencing.filters import FILTER_PARAMS, FILTERS, make_filter
+from motion_sensor.errors import MotionSensorError
 from motion_sensor.hand_sample import HandSample
+from motion_sensor.sequencing.filters import FILTER_PARAMS, FILTERS, make_filter
 
 # Drops that are the sequencer doing its job, not bad input: counted, never warned about.
 EXPECTED_DROPS = frozenset({"entry_trim", "exit_trim", "no_hand", "inactive_device"})
 
 
-INPUT_PARAMS = ParamSchema([
-    Param("topic", "~input", doc="motion_sensor/hand topic of the device"),
-    Param("device", "default", doc="device name (binding, active_device)"),
-    Param("priority", 0, doc="higher drives when several devices are alive"),
-])
+INPUT_PARAMS = ParamSchema(
+    [
+        Param("topic", "~input", doc="motion_sensor/hand topic of the device"),
+        Param("device", "default", doc="device name (binding, active_device)"),
+        Param("priority", 0, doc="higher drives when several devices are alive"),
+    ]
+)
 
 # The sequencer node's parameters (config/sequencer.yaml and what launch files set).
-SEQUENCER_PARAMS = ParamSchema([
-    Param("filter", "mean", choices=tuple(sorted(FILTERS)), doc="pose filter"),
-    Param("filter_params", {}, schema=FILTER_PARAMS, doc="per filter name, that filter's parameters"),
-    Param("queue_size", None, kind=int, unit="frames", low=1, high=10000, nullable=True,
-          doc="mean filter window; overrides filter_params.mean.queue_size when set"),
-    Param("max_age_s", 0.25, unit="s", low=0, low_open=True, doc="older frames are stale and dropped"),
-    Param("max_future_s", 0.05, unit="s", low=0, doc="frames stamped further ahead are dropped"),
-    Param("entry_trim_frames", 10, unit="frames", low=0, doc="ignored when a hand (re)enters"),
-    Param("exit_trim_frames", 0, unit="frames", low=0, doc="held back and discarded when a hand leaves"),
-    Param("hand_lost_s", 0.2, unit="s", low=0, low_open=True, doc="a gap this long means the hand left"),
-    Param("jump_distance_m", 0.05, unit="m", low=0, low_open=True, doc="a larger move within jump_window_s is a jump"),
-    Param("jump_angle_rad", 0.8, unit="rad", low=0, low_open=True, doc="a larger turn within jump_window_s is a jump"),
-    Param("jump_window_s", 0.05, unit="s", low=0, low_open=True, doc="time window of the jump test"),
-    Param("jump_accept_after", 5, unit="frames", low=1, doc="frames agreeing on a new place accept it"),
-    Param("device_timeout_s", 0.3, unit="s", low=0, low_open=True, doc="a silent device loses the binding"),
-    Param("active_device", "", doc="force a device by name; empty = highest priority alive"),
-    Param("hand_frame", "hand", doc="tf child frame of the filtered hand"),
-    Param("inputs", None, kind=list, item_kind=dict, nullable=True,
-          doc="[{topic, device, priority}] per device; unset = one input ~input named default"),
-])
+SEQUENCER_PARAMS = ParamSchema(
+    [
+        Param("filter", "mean", choices=tuple(sorted(FILTERS)), doc="pose filter"),
+        Param("filter_params", {}, schema=FILTER_PARAMS, doc="per filter name, that filter's parameters"),
+        Param(
+            "queue_size",
+            None,
+            kind=int,
+            unit="frames",
+            low=1,
+            high=10000,
+            nullable=True,
+            doc="mean filter window; overrides filter_params.mean.queue_size when set",
+        ),
+        Param("max_age_s", 0.25, unit="s", low=0, low_open=True, doc="older frames are stale and dropped"),
+        Param("max_future_s", 0.05, unit="s", low=0, doc="frames stamped further ahead are dropped"),
+        Param("entry_trim_frames", 10, unit="frames", low=0, doc="ignored when a hand (re)enters"),
+        Param("exit_trim_frames", 0, unit="frames", low=0, doc="held back and discarded when a hand leaves"),
+        Param("hand_lost_s", 0.2, unit="s", low=0, low_open=True, doc="a gap this long means the hand left"),
+        Param(
+            "jump_distance_m", 0.05, unit="m", low=0, low_open=True, doc="a larger move within jump_window_s is a jump"
+        ),
+        Param(
+            "jump_angle_rad", 0.8, unit="rad", low=0, low_open=True, doc="a larger turn within jump_window_s is a jump"
+        ),
+        Param("jump_window_s", 0.05, unit="s", low=0, low_open=True, doc="time window of the jump test"),
+        Param("jump_accept_after", 5, unit="frames", low=1, doc="frames agreeing on a new place accept it"),
+        Param("device_timeout_s", 0.3, unit="s", low=0, low_open=True, doc="a silent device loses the binding"),
+        Param("active_device", "", doc="force a device by name; empty = highest priority alive"),
+        Param("hand_frame", "hand", doc="tf child frame of the filtered hand"),
+        Param(
+            "inputs",
+            None,
+            kind=list,
+            item_kind=dict,
+            nullable=True,
+            doc="[{topic, device, priority}] per device; unset = one input ~input named default",
+        ),
+    ]
+)
 
 
 @dataclass
@@ -82,14 +103,13 @@ class SequencerConfig:
     jump_window_s: float = SEQUENCER_PARAMS.field("jump_window_s")
     jump_accept_after: int = SEQUENCER_PARAMS.field("jump_accept_after")
     device_timeout_s: float = SEQUENCER_PARAMS.field("device_timeout_s")
-    device_priorities: Dict[str, int] = field(default_factory=dict)
+    device_priorities: dict[str, int] = field(default_factory=dict)
     active_device: str = SEQUENCER_PARAMS.field("active_device")
 
     def __post_init__(self):
         try:
             # filter_params here is one filter's mapping, checked by that filter's constructor.
-            SEQUENCER_PARAMS.check_fields(self, "SequencerConfig", names={"filter_name": "filter",
-                                                                          "filter_params": ""})
+            SEQUENCER_PARAMS.check_fields(self, "SequencerConfig", names={"filter_name": "filter", "filter_params": ""})
         except ParameterError as exc:
             raise MotionSensorError(str(exc)) from None
         if self.filter_params is None:
@@ -115,11 +135,25 @@ def sequencer_setup(params: dict, source: str):
         inputs = [INPUT_PARAMS.validate(entry, f"{source}: 'inputs'[{i}]") for i, entry in enumerate(inputs)]
     name = params["filter"]
     filter_params = filter_params_for(params, name)
-    keys = ("max_age_s", "max_future_s", "entry_trim_frames", "exit_trim_frames", "hand_lost_s", "jump_distance_m",
-            "jump_angle_rad", "jump_window_s", "jump_accept_after", "device_timeout_s", "active_device")
-    config = SequencerConfig(filter_name=name, filter_params=filter_params,
-                             device_priorities={entry["device"]: entry["priority"] for entry in inputs},
-                             **{key: params[key] for key in keys})
+    keys = (
+        "max_age_s",
+        "max_future_s",
+        "entry_trim_frames",
+        "exit_trim_frames",
+        "hand_lost_s",
+        "jump_distance_m",
+        "jump_angle_rad",
+        "jump_window_s",
+        "jump_accept_after",
+        "device_timeout_s",
+        "active_device",
+    )
+    config = SequencerConfig(
+        filter_name=name,
+        filter_params=filter_params,
+        device_priorities={entry["device"]: entry["priority"] for entry in inputs},
+        **{key: params[key] for key in keys},
+    )
     return config, inputs
 
 
@@ -147,7 +181,7 @@ def _floats(values, length: int):
     return values if len(values) == length else None
 
 
-def validate_sample(sample: HandSample) -> Optional[str]:
+def validate_sample(sample: HandSample) -> str | None:
     """Return why ``sample`` is unusable, or None when it is fine."""
     # Every frame passes here on the latency-critical path: plain floats and math, since
     # numpy's per-call overhead on 3- and 4-vectors costs more than the checks themselves.
@@ -178,12 +212,12 @@ class DeviceBinder:
     """Chooses the device that drives: forced by name, else the highest priority heard
     within the timeout (unknown devices have priority 0; ties go to the earliest heard)."""
 
-    def __init__(self, priorities: Dict[str, int], timeout: float, forced: str = ""):
+    def __init__(self, priorities: dict[str, int], timeout: float, forced: str = ""):
         self.priorities = dict(priorities)
         self.timeout = timeout
         self.forced = forced
-        self.last_heard: Dict[str, float] = {}
-        self.active: Optional[str] = None
+        self.last_heard: dict[str, float] = {}
+        self.active: str | None = None
 
     def hear(self, device: str, now: float) -> bool:
         """Record a frame from ``device``; return whether it is the active device."""
@@ -208,23 +242,24 @@ class Sequencer:
     def __init__(self, config: SequencerConfig = None):
         self.config = config or SequencerConfig()
         self.filter = make_filter(self.config.filter_name, **self.config.filter_params)
-        self.binder = DeviceBinder(self.config.device_priorities, self.config.device_timeout_s,
-                                   self.config.active_device)
+        self.binder = DeviceBinder(
+            self.config.device_priorities, self.config.device_timeout_s, self.config.active_device
+        )
         self.counters = Counter()
         self.unexpected_drops = 0  # drops for bad or late input, worth a warning
-        self._last_stamp: Dict[str, float] = {}
+        self._last_stamp: dict[str, float] = {}
         self._last_command_stamp = None
         self._hand_key = None
         self._last_seen = None
         self._since_entry = 0
-        self._last_accepted = None      # (stamp, position, orientation) of the last accepted raw frame
+        self._last_accepted = None  # (stamp, position, orientation) of the last accepted raw frame
         self._jump_candidates = []
         self._delay = deque()
         # Continuity offsets (see _emit), plain floats: they are applied on every frame.
         self._offset_position = [0.0, 0.0, 0.0]
         self._offset_rotation = (0.0, 0.0, 0.0, 1.0)
         self._continuity_pending = False
-        self._last_output: Optional[SequencedPose] = None
+        self._last_output: SequencedPose | None = None
         self._active_device = None
 
     # -- inputs from the rest of the system ---------------------------------------------------
@@ -242,7 +277,7 @@ class Sequencer:
         self._last_accepted = None
         self._jump_candidates = []
 
-    def set_filter(self, name: str, params: Optional[dict] = None) -> None:
+    def set_filter(self, name: str, params: dict | None = None) -> None:
         """Switch the pose filter live (e.g. from the dashboard) without an output jump.
 
         The new filter starts empty; the continuity offset (as for a device switch) keeps
@@ -255,7 +290,7 @@ class Sequencer:
         self.counters["filter_switches"] += 1
 
     @property
-    def active_device(self) -> Optional[str]:
+    def active_device(self) -> str | None:
         """The device currently driving the output."""
         return self.binder.active
 
@@ -265,7 +300,7 @@ class Sequencer:
         return sum(v for k, v in self.counters.items() if k.startswith("dropped_"))
 
     # -- the pipeline ------------------------------------------------------------------------
-    def process(self, sample: HandSample, now: float) -> Optional[SequencedPose]:
+    def process(self, sample: HandSample, now: float) -> SequencedPose | None:
         """Take one sample at wall time ``now`` (s); return the pose to publish, or None.
 
         None means the frame was dropped or is held back; ``counters`` say why.
@@ -313,7 +348,7 @@ class Sequencer:
             self.unexpected_drops += 1
         return None
 
-    def _timing_problem(self, device: str, stamp: float, now: float) -> Optional[str]:
+    def _timing_problem(self, device: str, stamp: float, now: float) -> str | None:
         last = self._last_stamp.get(device)
         if last is not None and stamp == last:
             return "duplicate"
@@ -383,8 +418,9 @@ class Sequencer:
         x, y, z, w = multiply_quaternions(self._offset_rotation, orientation)
         norm = quaternion_norm((x, y, z, w))
         orientation = np.array([x / norm, y / norm, z / norm, w / norm])
-        out = SequencedPose(sample.stamp, position, orientation, sample.frame_id, sample.primary_type,
-                            sample.hands_num, sample.device)
+        out = SequencedPose(
+            sample.stamp, position, orientation, sample.frame_id, sample.primary_type, sample.hands_num, sample.device
+        )
         self._last_output = out
         self.counters["frames_out"] += 1
         return out
@@ -393,4 +429,3 @@ class Sequencer:
 def _distance(a, b) -> float:
     """Euclidean distance of two 3-sequences of floats."""
     return math.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
-

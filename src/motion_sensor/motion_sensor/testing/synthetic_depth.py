@@ -11,8 +11,9 @@ nearest hit kept, so depths are exact to float precision before the optional sen
 Coordinates are optical (x right, y down, z forward); ``HAND_UPRIGHT`` is the operator's
 open hand facing the camera with the fingers up.
 """
+
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import List, Sequence, Tuple
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -24,10 +25,10 @@ HAND_UPRIGHT = np.column_stack(([0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.
 
 DEFAULT_INTRINSICS = Intrinsics(fx=570.0, fy=570.0, cx=319.5, cy=239.5, width=640, height=480)
 
-PALM_SEMI_AXES = (0.045, 0.042, 0.018)       # m: along the fingers, across, thickness
+PALM_SEMI_AXES = (0.045, 0.042, 0.018)  # m: along the fingers, across, thickness
 FOREARM_RADIUS = 0.026
 FOREARM_LENGTH = 0.26
-FOREARM_TILT = np.radians(30.0)               # away from the camera (towards the back of the hand)
+FOREARM_TILT = np.radians(30.0)  # away from the camera (towards the back of the hand)
 
 
 @dataclass(frozen=True)
@@ -39,13 +40,17 @@ class HandPose:
     grab: float = 0.0
 
 
-def _capsules(pose: HandPose, forearm: bool) -> List[Tuple[np.ndarray, np.ndarray, float]]:
+def _capsules(pose: HandPose, forearm: bool) -> list[tuple[np.ndarray, np.ndarray, float]]:
     """(start, end, radius) of the finger, thumb, wrist and forearm capsules (optical)."""
     R, p, g = pose.rotation, np.asarray(pose.position, float), float(pose.grab)
     out = []
     curl = g * np.radians(110.0)
-    for y, length, spread in ((-0.031, 0.068, -0.12), (-0.011, 0.078, -0.04), (0.011, 0.082, 0.04),
-                              (0.031, 0.074, 0.12)):
+    for y, length, spread in (
+        (-0.031, 0.068, -0.12),
+        (-0.011, 0.078, -0.04),
+        (0.011, 0.082, 0.04),
+        (0.031, 0.074, 0.12),
+    ):
         base = p + R @ np.array([0.040, y, 0.0])
         direction = np.array([np.cos(curl) * np.cos(spread), np.sin(spread) * (1 - g), -np.sin(curl)])
         out.append((base, base + R @ (direction / np.linalg.norm(direction)) * length * (1 - 0.35 * g), 0.0085))
@@ -123,9 +128,17 @@ def _hit_ellipsoid(d, centre, rotation, semi_axes):
     return t
 
 
-def render_hand(pose: HandPose, intr: Intrinsics = DEFAULT_INTRINSICS, forearm: bool = True,
-                torso: bool = True, background_m: float = 2.5, extra: Sequence[HandPose] = (),
-                noise_per_m2: float = 0.0, rng: np.random.Generator = None, quantise_mm: bool = True) -> np.ndarray:
+def render_hand(
+    pose: HandPose,
+    intr: Intrinsics = DEFAULT_INTRINSICS,
+    forearm: bool = True,
+    torso: bool = True,
+    background_m: float = 2.5,
+    extra: Sequence[HandPose] = (),
+    noise_per_m2: float = 0.0,
+    rng: np.random.Generator = None,
+    quantise_mm: bool = True,
+) -> np.ndarray:
     """Depth image (m, float32, 0 where nothing is hit) of the hand (and ``extra`` hands)."""
     depth = np.full((intr.height, intr.width), np.inf)
     shapes = []
@@ -154,13 +167,13 @@ def render_hand(pose: HandPose, intr: Intrinsics = DEFAULT_INTRINSICS, forearm: 
     depth[np.isinf(depth)] = 0.0
     if noise_per_m2 > 0:
         rng = rng or np.random.default_rng(0)
-        depth = np.where(depth > 0, depth + rng.normal(0.0, 1.0, depth.shape) * noise_per_m2 * depth ** 2, 0.0)
+        depth = np.where(depth > 0, depth + rng.normal(0.0, 1.0, depth.shape) * noise_per_m2 * depth**2, 0.0)
     if quantise_mm:
         depth = np.round(depth * 1000.0) / 1000.0
     return depth.astype(np.float32)
 
 
-def hand_path(frames: int, seed: int = 0) -> List[HandPose]:
+def hand_path(frames: int, seed: int = 0) -> list[HandPose]:
     """A smooth 3-D path through the working volume (x +-0.18, y +-0.12, z 0.55-1.05 m) with
     the hand turning up to about 25 degrees about each axis, grab 0."""
     rng = np.random.default_rng(seed)
@@ -168,9 +181,11 @@ def hand_path(frames: int, seed: int = 0) -> List[HandPose]:
     poses = []
     for s in np.linspace(0.0, 1.0, frames, endpoint=False):
         w = 2 * np.pi * s
-        position = np.array([0.18 * np.sin(w + phase[0]), 0.12 * np.sin(2 * w + phase[1]),
-                             0.80 + 0.25 * np.sin(w + phase[2])])
-        turn = Rotation.from_euler("xyz", [0.35 * np.sin(w + phase[3]), 0.35 * np.sin(2 * w + phase[4]),
-                                           0.45 * np.sin(w + phase[5])])
+        position = np.array(
+            [0.18 * np.sin(w + phase[0]), 0.12 * np.sin(2 * w + phase[1]), 0.80 + 0.25 * np.sin(w + phase[2])]
+        )
+        turn = Rotation.from_euler(
+            "xyz", [0.35 * np.sin(w + phase[3]), 0.35 * np.sin(2 * w + phase[4]), 0.45 * np.sin(w + phase[5])]
+        )
         poses.append(HandPose(position, HAND_UPRIGHT @ turn.as_matrix()))
     return poses
