@@ -333,7 +333,7 @@ def plot(results, path):
     fig, axes = plt.subplots(1, panels, figsize=(6.5 * panels, 4.5), squeeze=False)
     ax = axes[0][0]
     x = np.arange(len(names))
-    for offset, (label, key, floor_key) in enumerate(
+    for offset, (label, key, _floor_key) in enumerate(
         (("session", None, None), ("floor (queued)", "floor", None), ("floor (sync)", "sync_floor", None))
     ):
         p50 = [

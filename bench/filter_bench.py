@@ -181,7 +181,9 @@ def main():
     for curve, (name, sweep) in SWEEPS.items():
         curves[curve] = []
         for params in sweep:
-            jitter, lag = evaluate(data, lambda n: run_filter(name, params, data[n][0], data[n][1], data[n][3]))
+            jitter, lag = evaluate(
+                data, lambda n, name=name, params=params: run_filter(name, params, data[n][0], data[n][1], data[n][3])
+            )
             curves[curve].append({"params": params, "jitter_mm": round(jitter, 4), "lag_mm": round(lag, 3)})
             done += 1
             print(f"[{done:3d}/{total}] {curve:17s} {params}: jitter {jitter:.4f} mm, lag {lag:.2f} mm", flush=True)

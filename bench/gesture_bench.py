@@ -127,8 +127,8 @@ def shrec_sequences(data, joint, coarse):
 def split(seqs):
     subjects = sorted({s for *_, s in seqs})
     first = set(subjects[: len(subjects) // 2])
-    a = [(l, p, t) for l, p, t, s in seqs if s in first]
-    b = [(l, p, t) for l, p, t, s in seqs if s not in first]
+    a = [(label, p, t) for label, p, t, s in seqs if s in first]
+    b = [(label, p, t) for label, p, t, s in seqs if s not in first]
     return a, b
 
 

@@ -45,9 +45,9 @@ def make(spec):
 
 
 def accuracy(spec, train, test, stride):
-    clf = make(spec).fit([(l, p, t) for l, p, t, _ in train])
+    clf = make(spec).fit([(label, p, t) for label, p, t, _ in train])
     test = test[::stride]
-    return float(np.mean([clf.classify(p, t).label == l for l, p, t, _ in test]))
+    return float(np.mean([clf.classify(p, t).label == label for label, p, t, _ in test]))
 
 
 def halves(seqs):
@@ -68,7 +68,7 @@ def evaluate(spec, seqs, stride):
 
 def datasets():
     letters = air_letters.dataset(range(1, 21), 1, seed=2026)
-    out = {"letters": [(l, p, t, s) for s in letters for l, p, t in letters[s]]}
+    out = {"letters": [(label, p, t, s) for s in letters for label, p, t in letters[s]]}
     if os.path.exists(SHREC):
         data = np.load(SHREC)
         joints, offsets = data["joints"], data["offsets"]

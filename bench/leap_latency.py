@@ -47,7 +47,9 @@ def main():
                     keys[tuple(np.round(select_primary(frame).position, 9))] = index
             raw_times, stamp_to_index, out_times, lock = {}, {}, {}, threading.Lock()
 
-            def on_raw(msg):
+            # The callbacks bind this recording's tables: a late message of the previous
+            # recording's subscribers must not land in the next one's.
+            def on_raw(msg, *, keys=keys, lock=lock, raw_times=raw_times, stamp_to_index=stamp_to_index):
                 now = time.time()
                 index = keys.get(tuple(np.round([msg.position.x, msg.position.y, msg.position.z], 9)))
                 if index is not None:
@@ -55,7 +57,7 @@ def main():
                         raw_times.setdefault(index, now)
                         stamp_to_index[msg.header.stamp.to_nsec()] = index
 
-            def on_filtered(msg):
+            def on_filtered(msg, *, lock=lock, stamp_to_index=stamp_to_index, out_times=out_times):
                 now = time.time()
                 with lock:
                     index = stamp_to_index.get(msg.header.stamp.to_nsec())

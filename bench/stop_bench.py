@@ -44,10 +44,16 @@ def make(name):
 
     if name == "pybullet":
         driver = create_driver("pybullet", urdf_path=URDF, initial_joints=list(HOME), real_time=True)
-        still = lambda: np.max(np.abs(driver.get_joint_velocities())) < 0.01
+
+        def still():
+            return np.max(np.abs(driver.get_joint_velocities())) < 0.01
+
     else:
         driver = create_driver("ur_rtde_fake", urdf_path=URDF, initial_joints=list(HOME))
-        still = lambda: not driver.fake.is_moving()
+
+        def still():
+            return not driver.fake.is_moving()
+
     driver.login()
     return driver, still
 

@@ -78,7 +78,7 @@ class TwoMachines:
 
     def __enter__(self):
         try:
-            for side, ns in self.ns.items():
+            for _side, ns in self.ns.items():
                 _ip("netns", "add", ns)
                 self.made.append(ns)
             _ip("link", "add", self.veth["robot"], "type", "veth", "peer", "name", self.veth["sensor"])

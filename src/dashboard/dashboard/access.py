@@ -36,7 +36,10 @@ __all__ = [
 LOCAL_HOSTS = frozenset({"127.0.0.1", "localhost", "::1"})
 MIN_TOKEN_BITS = 64
 TOKEN_ENV = "MOTION_DASHBOARD_TOKEN"
-_TOKEN_HINT = "e.g. openssl rand -hex 16 > ~/.dashboard_token; chmod 600 ~/.dashboard_token; dashboard_token_file:=~/.dashboard_token"
+_TOKEN_HINT = (
+    "e.g. openssl rand -hex 16 > ~/.dashboard_token; chmod 600 ~/.dashboard_token; "
+    "dashboard_token_file:=~/.dashboard_token"
+)
 
 
 def token_strength(token: str) -> float:

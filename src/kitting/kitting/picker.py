@@ -171,7 +171,10 @@ def check_segment(
         point = start + (end - start) * fraction
         for box in obstacles:
             if box.distance(point) < clearance:
-                return f"path passes {box.distance(point) * 1000:.1f} mm from the {box.name} at {np.round(point, 3).tolist()}"
+                return (
+                    f"path passes {box.distance(point) * 1000:.1f} mm from the {box.name} "
+                    f"at {np.round(point, 3).tolist()}"
+                )
     return ""
 
 

@@ -119,7 +119,7 @@ class BeltTracker:
                 if distance <= P["gate"]:
                     pairs.append((distance, track_id, index))
         matched_tracks, matched_obs = set(), set()
-        for distance, track_id, index in sorted(pairs):
+        for _distance, track_id, index in sorted(pairs):
             if track_id in matched_tracks or index in matched_obs:
                 continue
             matched_tracks.add(track_id)

@@ -31,9 +31,14 @@ def test_python_tables_match_the_srv_file():
 
 def test_srv_fields_are_table_2():
     request, response = (part.strip().splitlines() for part in open(SRV, encoding="utf-8").read().split("---"))
-    fields = lambda lines: [
-        l.split("#")[0].strip() for l in lines if l.strip() and not l.startswith("#") and "=" not in l
-    ]
+
+    def fields(lines):
+        return [
+            line.split("#")[0].strip()
+            for line in lines
+            if line.strip() and not line.startswith("#") and "=" not in line
+        ]
+
     assert fields(request) == [
         "uint8 command_index",
         "std_msgs/Header header",
@@ -229,7 +234,10 @@ def test_a_stream_is_checked_step_by_step_and_bounded_ahead_of_a_lagging_robot()
     now = [0.0]
     robot = LaggingServo()
     dispatcher = CommandDispatcher(robot, max_stream_step=0.2, max_stream_lag=0.6, clock=lambda: now[0])
-    stream = lambda q: dispatcher.handle(CommandIndex.SET_JOINTS, joints=[q, 0, 0, 0, 0, 0]).result
+
+    def stream(q):
+        return dispatcher.handle(CommandIndex.SET_JOINTS, joints=[q, 0, 0, 0, 0, 0]).result
+
     # Steps of 0.15 rad from the previous target are accepted although the robot lags behind...
     results = []
     for i in range(1, 5):

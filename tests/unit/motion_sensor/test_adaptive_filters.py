@@ -115,10 +115,10 @@ def test_bad_adaptive_parameters_are_rejected_by_name(name, params):
 def test_imm_recovers_from_a_huge_accepted_move_without_non_finite_output():
     f = KalmanFilter()
     t = 10.0
-    for i in range(50):
+    for _step in range(50):
         t += 0.009
         out, _ = f.update(t, np.array([0.0, 0.0, 0.2]), IDENTITY)
-    for i in range(20):  # the sequencer accepted a 5 km "move" (a broken device)
+    for _step in range(20):  # the sequencer accepted a 5 km "move" (a broken device)
         t += 0.009
         out, _ = f.update(t, np.array([5000.0, 0.0, 0.2]), IDENTITY)
         assert np.all(np.isfinite(out))

@@ -176,7 +176,7 @@ def test_highest_priority_device_drives_and_switching_does_not_jump():
     seq = plain(device_priorities={"leap": 2, "spacemouse": 1}, device_timeout_s=0.05)
     t = 10.0
     outputs = []
-    for i in range(10):  # both devices publish; only the leap drives
+    for _ in range(10):  # both devices publish; only the leap drives
         t += 0.01
         outputs.append(seq.process(sample(t, position=(0.1, 0, 0.2), device="leap"), now=t))
         assert seq.process(sample(t + 0.001, position=(0.5, 0, 0.2), device="spacemouse"), now=t + 0.001) is None

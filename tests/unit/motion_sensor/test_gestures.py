@@ -185,7 +185,7 @@ def test_dtw_cascade_equals_full_scan(kwargs):
     train, test = _letters(range(1, 4)), _letters(range(4, 6))
     clf = DTWClassifier(**kwargs).fit(train)
     calls = []
-    for label, points, times in test[:30]:
+    for _label, points, times in test[:30]:
         q = clf.features(points, times)
         result = clf.classify_features(q)
         full = np.array([clf.dtw(q, t) for t in clf._data])

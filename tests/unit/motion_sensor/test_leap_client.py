@@ -110,8 +110,8 @@ def test_reconnects_with_backoff_after_a_drop():
     )
     thread = threading.Thread(target=client.run, daemon=True)
     thread.start()
-    for _ in range(3):  # nobody listening yet: refused, retried with growing delays
-        assert wait_for(lambda: len(waits) > _)
+    for attempt in range(3):  # nobody listening yet: refused, retried with growing delays
+        assert wait_for(lambda attempt=attempt: len(waits) > attempt)
         allowed.release()
     assert wait_for(lambda: len(waits) == 4)
     assert waits == [0.05, 0.1, 0.2, 0.2] and client.counters["disconnects"] == 4

@@ -48,7 +48,7 @@ def framework_packages():
 
 def test_bringup_holds_no_python():
     for package in NO_PYTHON:
-        for folder, _, files in os.walk(os.path.join(SRC, package)):
+        for _folder, _, files in os.walk(os.path.join(SRC, package)):
             assert not [f for f in files if f.endswith(".py")], f"{package} is launch files only"
 
 

@@ -42,7 +42,7 @@ class DeviceNode:
             rospy.logfatal("%s: %s", node_name, exc)
             raise SystemExit(1) from None
         self.device.info = lambda text: rospy.loginfo("%s: %s", node_name, text)
-        self.device.warn = lambda text: rospy.logwarn_throttle(5.0, "%s: %s" % (node_name, text))
+        self.device.warn = lambda text: rospy.logwarn_throttle(5.0, f"{node_name}: {text}")
         # queue_size None is rospy's synchronous publish: the device thread does the socket
         # write itself. Hand frames are small and the device thread has nothing else to do,
         # so the queue's thread hand-off would only add latency.

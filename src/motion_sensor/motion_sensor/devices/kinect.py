@@ -37,7 +37,7 @@ _LOADED = {}
 
 
 def load_sync_library(fake: bool, stub_dir: str = "") -> ctypes.CDLL:
-    """libfreenect_sync bound to the real libfreenect, or to fakenect's (plus a stub for its missing camera_to_world)."""
+    """libfreenect_sync bound to the real libfreenect or to fakenect's (plus a stub for its missing camera_to_world)."""
     kind = "fakenect" if fake else "device"
     if _LOADED and kind not in _LOADED:
         raise MotionSensorError(
@@ -80,7 +80,9 @@ class KinectDevice(DepthHandDevice):
                     "depth_format",
                     "mm",
                     choices=("mm", "11bit"),
-                    doc="mm: libfreenect's calibrated conversion (a real Kinect); 11bit: raw, converted here (fakenect)",
+                    doc=(
+                        "mm: libfreenect's calibrated conversion (a real Kinect); 11bit: raw, converted here (fakenect)"
+                    ),
                 ),
                 Param(
                     "intrinsics_px",

@@ -227,8 +227,8 @@ class SpaceMouseReader:
     """Reads HID reports from a SpaceMouse through hidapi, reconnecting with backoff.
 
     ``on_report(report, received_time)`` gets every input report, ``on_connect(name)`` each
-    opened device, ``on_problem(text)`` every connection problem. ``hid_module`` is hidapi's ``hid`` module (a stand-in in
-    tests). ``run`` blocks until ``stop``.
+    opened device, ``on_problem(text)`` every connection problem. ``hid_module`` is hidapi's
+    ``hid`` module (a stand-in in tests). ``run`` blocks until ``stop``.
     """
 
     def __init__(
