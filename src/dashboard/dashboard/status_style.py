@@ -3,7 +3,8 @@
 from motion_commander.teleop_core import TeleopStatus
 
 # Green: streaming; amber: streaming but limited; orange: holding for a reason; red: the
-# e-stop; grey: idle. Every TeleopStatus has a colour (tests/unit/dashboard/test_dashboard_state.py).
+# e-stop or a lost robot server; grey: idle. Every TeleopStatus has a colour
+# (tests/unit/dashboard/test_dashboard_state.py).
 STATUS_COLOURS = {
     TeleopStatus.WAITING_FOR_ROBOT: "grey",
     TeleopStatus.DISENGAGED: "grey",
@@ -18,6 +19,7 @@ STATUS_COLOURS = {
     TeleopStatus.STALE_INPUT_HALT: "orange",
     TeleopStatus.SINGULARITY_HALT: "orange",
     TeleopStatus.ESTOP: "red",
+    TeleopStatus.SERVER_LOST: "red",
 }
 
 # The clutch is closed (the hand steers the tool) in these states.
@@ -26,6 +28,7 @@ ENGAGED_STATUSES = frozenset(STATUS_COLOURS) - {
     TeleopStatus.DISENGAGED,
     TeleopStatus.ESTOP,
     TeleopStatus.BAD_INPUT,
+    TeleopStatus.SERVER_LOST,
 }
 
 

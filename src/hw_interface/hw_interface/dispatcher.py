@@ -82,6 +82,7 @@ class CommandDispatcher:
         move_timeout: float = 30.0,
         max_stream_lag: float = 0.6,
         clock=time.monotonic,
+        stream_start_tolerance: float = 0.05,
     ):
         self.driver = driver
         self.workspace = workspace or Workspace()
@@ -93,6 +94,11 @@ class CommandDispatcher:
         # the lagging measured joints; the lag itself is bounded separately, so a stream
         # can never run away from a robot that does not follow.
         self.max_stream_lag = float(max_stream_lag)
+        # A stream starts where the robot is: its first target (after a (re)start, a STOP, a
+        # move or a pause) must lie within this of the measured joints. A client that kept
+        # streaming through a server restart sends targets from before it, and those are
+        # refused until it engages afresh from the measured joints.
+        self.stream_start_tolerance = min(float(stream_start_tolerance), self.max_stream_step)
         self._clock = clock
         self._stream_lock = threading.Lock()  # service threads stream concurrently
         self._stream_reference: np.ndarray | None = None
@@ -262,9 +268,15 @@ class CommandDispatcher:
             with self._stream_lock:
                 fresh = self._clock() - self._stream_time <= STREAM_REFERENCE_TIMEOUT
                 reference = self._stream_reference if fresh and self._stream_reference is not None else None
-            against = "the last streamed target" if reference is not None else "the robot"
             base = current if reference is None else float_list(reference)
             step = max(abs(v - b) for v, b in zip(q, base))
+            if reference is None and step > self.stream_start_tolerance:
+                return Result.TOO_FAR, (
+                    f"SET_JOINTS starts a stream {step:.3f} rad from the measured joints (limit "
+                    f"{self.stream_start_tolerance:.3f}): a stream must start where the robot is; engage afresh "
+                    "from the measured joints (use MOVE_J for large motions)"
+                )
+            against = "the last streamed target" if reference is not None else "the robot"
             if step > self.max_stream_step:
                 return Result.TOO_FAR, (
                     f"SET_JOINTS target is {step:.3f} rad from {against} (limit "

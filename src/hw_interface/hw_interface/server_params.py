@@ -41,6 +41,16 @@ SERVER_PARAMETERS = ParamSchema(
             low_open=True,
         ),
         Param(
+            "stream_start_tolerance",
+            0.05,
+            "rad",
+            "the first SET_JOINTS of a stream (after a start, STOP, move or pause) must lie this close to the measured "
+            "joints: a stale stream from before a restart is refused",
+            low=0.0,
+            high=3.2,
+            low_open=True,
+        ),
+        Param(
             "move_timeout",
             60.0,
             "s",

@@ -111,6 +111,26 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 "max_acceleration", 3.0, "rad/s^2", "MoveJ/MoveL joint acceleration", low=0.0, high=100.0, low_open=True
             ),
             Param("cartesian_speed", 0.25, "m/s", "MoveL tool speed", low=0.0, high=3.0, low_open=True),
+            Param(
+                "stream_acceleration",
+                200.0,
+                "rad/s^2",
+                "largest joint acceleration of a streamed (SET_JOINTS) motion, enforced here whatever the client "
+                "sends, braking in time to stop at each target",
+                low=0.0,
+                high=10000.0,
+                low_open=True,
+            ),
+            Param(
+                "stream_timeout",
+                0.1,
+                "s",
+                "without a new SET_JOINTS for this long a stream stops (the arm brakes to rest), as the UR's "
+                "external control does",
+                low=0.0,
+                high=10.0,
+                low_open=True,
+            ),
             Param("real_time", True, doc="step in real time (false: as fast as possible)"),
             Param("scene", [], doc="extra bodies, see hw_interface.sim_driver.load_scene", item_kind=dict),
             Param("gripper_output", 0, "", "digital output that switches the suction gripper", low=0, high=63),
@@ -148,6 +168,8 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         speed_scale: float = 0.5,
         max_acceleration: float = 3.0,
         cartesian_speed: float = 0.25,
+        stream_acceleration: float = 200.0,
+        stream_timeout: float = 0.1,
         real_time: bool = True,
         robot_name: str | None = None,
         scene=None,
@@ -179,7 +201,12 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._joint_indices = []
         self._tool_link = -1
         self._target = self._initial.copy()
-        self._follower = StreamFollower(self.kinematics.velocity_limits, self._initial)
+        self.stream_acceleration = float(stream_acceleration)
+        self.stream_timeout = float(stream_timeout)
+        self._follower = StreamFollower(self.kinematics.velocity_limits, self._initial, self.stream_acceleration)
+        # Simulated time of the last SET_JOINTS (None: no stream): the stream watchdog.
+        self._last_stream: float | None = None
+        self.stream_timeouts = 0
         # Wall-clock time (s) of the state after the last physics step, see joint_sample().
         self._step_stamp = time.time()
         # name -> (steps, value): readings of the state after the step numbered steps, see
@@ -324,6 +351,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             if self._path is not None:
                 raise HwInterfaceError("a MoveJ/MoveL is running; STOP it before streaming", Result.BUSY)
             self._follower.set_goal(target)
+            self._last_stream = self._sim_time
 
     def move_j(self, joints, timeout: float = 30.0) -> None:
         goal = np.asarray(joints, dtype=float)
@@ -498,6 +526,11 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 if self._client is None:
                     break
                 if self._path is None:
+                    if self._last_stream is not None and self._sim_time - self._last_stream > self.stream_timeout:
+                        # The stream stopped (a client died, the network was cut): brake to rest.
+                        self._follower.brake()
+                        self._last_stream = None
+                        self.stream_timeouts += 1
                     self._target = self._follower.step(self.time_step)
                 else:
                     elapsed = self._sim_time - self._path_start

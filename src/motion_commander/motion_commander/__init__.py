@@ -16,6 +16,8 @@ Its modules, by role (the robot model itself is ``motion_common.kinematics``):
 - ``program``: the program file of a gesture-taught task (read and written by both
   applications);
 - ``session_report``: a teleop session's figures and plot;
+- ``server_watch``: whether the robot server is alive (failed calls, stale joint_states),
+  probed with backoff while it is lost;
 - ``errors``: ``MotionCommanderError``.
 
 No module here imports rospy: the nodes (``nodes/``) are the ROS edges. The names in

@@ -39,6 +39,15 @@ _MAPPING = [
 _NODE = [
     Param("urdf", "", doc="robot URDF path (set by the launch file)"),
     Param(
+        "server_timeout_s",
+        0.5,
+        "s",
+        "joint_states silence after which the robot server counts as lost (it publishes at 100 Hz): "
+        "SERVER_LOST, nothing streams until it is back and the operator engages afresh",
+        low=0.05,
+        high=10.0,
+    ),
+    Param(
         "ready_timeout_s",
         60.0,
         "s",

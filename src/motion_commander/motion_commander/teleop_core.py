@@ -48,6 +48,7 @@ class TeleopStatus(enum.IntEnum):
     JOINT_LIMIT_MARGIN = 10  # a joint target was clipped to its limit minus the margin
     ESTOP = 11  # e-stop active: robot halted, teleop disengaged until released
     RAMPING = 12  # just engaged or resumed: speed ramping up from zero
+    SERVER_LOST = 13  # the robot server stopped answering (or its joint_states went stale): nothing streams
 
 
 # Engaged and commanding at the allowed speed: the statuses a fast hand moves among many
@@ -185,6 +186,7 @@ class TeleopCore:
         self.status = TeleopStatus.WAITING_FOR_ROBOT
         self.measured_joints: np.ndarray | None = None
         self.estopped = False
+        self.server_lost = False
         self._command: np.ndarray | None = None
         # Jacobian condition number and tool pose at _command (None: not known yet); the
         # first is carried from the frame that chose the command, both are filled between
@@ -205,7 +207,7 @@ class TeleopCore:
     def on_joint_state(self, joints) -> None:
         """Record the robot's measured joints (the reference at engage and resume)."""
         self.measured_joints = np.asarray(joints, dtype=float)
-        if self.status == TeleopStatus.WAITING_FOR_ROBOT:
+        if self.status == TeleopStatus.WAITING_FOR_ROBOT and not self.server_lost:
             self.status = TeleopStatus.DISENGAGED
 
     def set_estop(self, active: bool) -> bool:
@@ -221,12 +223,26 @@ class TeleopCore:
             self.status = TeleopStatus.DISENGAGED if self.measured_joints is not None else self.status
         return False
 
+    def set_server_lost(self, lost: bool) -> None:
+        """The robot server is lost (True) or back (False). Lost: disengage and stream
+        nothing. Back: a fresh engage is needed, from the measured joints at that time, through
+        the engage ramp; a stream never resumes by itself."""
+        was = self.server_lost
+        self.server_lost = bool(lost)
+        if self.server_lost:
+            self.disengage()
+            self.measured_joints = None  # the state from before the outage is not the robot's now
+            self.status = TeleopStatus.SERVER_LOST
+        elif was:
+            self.clutch.reset()
+            self.status = TeleopStatus.WAITING_FOR_ROBOT if self.measured_joints is None else TeleopStatus.DISENGAGED
+
     def disengage(self) -> None:
         """Open the clutch: no more commands until the next engage; the robot holds."""
         self.mapper.disengage()
         self._command = None
         self.watchdog.clear()
-        if self.status not in (TeleopStatus.WAITING_FOR_ROBOT, TeleopStatus.ESTOP):
+        if self.status not in (TeleopStatus.WAITING_FOR_ROBOT, TeleopStatus.ESTOP, TeleopStatus.SERVER_LOST):
             self.status = TeleopStatus.DISENGAGED
 
     def tick(self, now: float) -> Action:
@@ -261,7 +277,7 @@ class TeleopCore:
             self.status = TeleopStatus.BAD_INPUT
             return None
         position, orientation = p, q  # the mapper takes float lists
-        if self.measured_joints is None or self.estopped:
+        if self.measured_joints is None or self.estopped or self.server_lost:
             return None
         if not self.clutch.on_frame(stamp, hands_num):
             if self.mapper.engaged:

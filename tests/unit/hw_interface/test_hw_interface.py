@@ -233,7 +233,9 @@ class LaggingServo(RobotDriver):
 def test_a_stream_is_checked_step_by_step_and_bounded_ahead_of_a_lagging_robot():
     now = [0.0]
     robot = LaggingServo()
-    dispatcher = CommandDispatcher(robot, max_stream_step=0.2, max_stream_lag=0.6, clock=lambda: now[0])
+    dispatcher = CommandDispatcher(
+        robot, max_stream_step=0.2, max_stream_lag=0.6, clock=lambda: now[0], stream_start_tolerance=0.2
+    )
 
     def stream(q):
         return dispatcher.handle(CommandIndex.SET_JOINTS, joints=[q, 0, 0, 0, 0, 0]).result
@@ -259,6 +261,27 @@ def test_a_stream_is_checked_step_by_step_and_bounded_ahead_of_a_lagging_robot()
     # A pause longer than the stream timeout restarts from the measured joints too.
     now[0] += 1.0
     assert stream(0.25) == Result.TOO_FAR
+
+
+def test_a_stale_stream_after_a_restart_is_refused_until_it_starts_at_the_robot():
+    """A client that streamed through a server restart sends targets from before it: 0.17 rad
+    from the arm was accepted (within max_stream_step) and the arm lurched. A stream now
+    starts within stream_start_tolerance of the measured joints, and only then continues
+    step by step."""
+    now = [0.0]
+    robot = LaggingServo()
+    dispatcher = CommandDispatcher(robot, max_stream_step=0.2, max_stream_lag=0.6, clock=lambda: now[0])
+
+    def stream(q):
+        now[0] += 0.009
+        return dispatcher.handle(CommandIndex.SET_JOINTS, joints=[q, 0, 0, 0, 0, 0])
+
+    stale = stream(0.17)
+    assert stale.result == Result.TOO_FAR and "starts a stream" in stale.reason and robot.targets == []
+    assert stream(0.01).result == Result.SUCCESS
+    assert stream(0.1).result == Result.SUCCESS  # continuing: checked against the last target
+    now[0] += 1.0  # a pause: the next target starts a stream again
+    assert stream(0.25).result == Result.TOO_FAR
 
 
 def test_sim_scene_reset_puts_part_arm_and_gripper_back():
