@@ -15,7 +15,8 @@ Its modules, by role (the robot model itself is ``motion_common.kinematics``):
   vocabulary, over any object with the motion controller client's methods;
 - ``program``: the program file of a gesture-taught task (read and written by both
   applications);
-- ``session_report``: a teleop session's figures and plot;
+- ``session_report``: a teleop session's figures and plot, in bounded memory
+  (``latency_stats``: streaming latency percentiles in a fixed histogram);
 - ``server_watch``: whether the robot server is alive (failed calls, stale joint_states),
   probed with backoff while it is lost;
 - ``errors``: ``MotionCommanderError``.

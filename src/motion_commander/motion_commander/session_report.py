@@ -2,32 +2,74 @@
 and how long commands took from sensor to driver. Pure Python (numpy, matplotlib Agg)."""
 
 import json
-from dataclasses import dataclass, field
+from collections import deque
+from dataclasses import dataclass
 
 import numpy as np
+
+from .latency_stats import LatencyStats
+
+#: Samples of each path a monitor keeps (about 9 minutes of a 110 Hz stream): a session that
+#: runs all day keeps bounded memory, and the tracking figures cover its last window.
+WINDOW_SAMPLES = 60_000
 
 
 @dataclass
 class SessionData:
-    """What a monitor collected during a session (times in seconds, positions in metres).
+    """What a monitor collected during a session (times in seconds, positions in metres),
+    in bounded memory however long it runs.
 
     ``targets`` rows are (sensor stamp, x, y, z) of the mapped tool target (the scaled
     hand path in the robot base frame); ``tools`` rows are (stamp, x, y, z) of the measured
-    tool; ``latencies`` are sensor-to-driver seconds of accepted commands.
+    tool; ``hands`` and ``raw_hands`` the same of the sequencer's filtered hand and the
+    device's raw one, in the device frame. They keep the last ``window`` samples each; the
+    counts, the hand path length and the latency figures (``LatencyStats``, exact to 10 us)
+    cover the whole session.
     """
 
     frames_in: int = 0
     frames_out: int = 0
     frames_dropped: int = 0
     commands_refused: int = 0
-    targets: list[tuple] = field(default_factory=list)
-    tools: list[tuple] = field(default_factory=list)
-    latencies: list[float] = field(default_factory=list)
-    stage_latencies: list[tuple] = field(default_factory=list)  # (sequencer, core, driver) s
-    # (sensor stamp, x, y, z) of the hand in the device frame: the sequencer's filtered
-    # output and the device's raw frames, to judge tracking on what the operator did.
-    hands: list[tuple] = field(default_factory=list)
-    raw_hands: list[tuple] = field(default_factory=list)
+    targets: deque = None
+    tools: deque = None
+    latencies: LatencyStats = None
+    stage_latencies: tuple = None  # LatencyStats of (sequencer, core, driver), s
+    hands: deque = None
+    raw_hands: deque = None
+    window: int = WINDOW_SAMPLES
+    commands_sent: int = 0
+    path_length: float = 0.0  # m of target path, the whole session
+
+    def __post_init__(self):
+        # Lists given to the constructor (tests, tools) are taken as the first samples.
+        given_targets = list(self.targets or [])
+        self.targets = deque(maxlen=self.window)
+        for row in given_targets:
+            self.add_target(row)
+        for name in ("tools", "hands", "raw_hands"):
+            setattr(self, name, deque(getattr(self, name) or [], maxlen=self.window))
+        if not isinstance(self.latencies, LatencyStats):
+            self.latencies = LatencyStats(self.latencies or [])
+        rows = self.stage_latencies if self.stage_latencies is not None else []
+        if not (isinstance(rows, tuple) and rows and all(isinstance(r, LatencyStats) for r in rows)):
+            stages = (LatencyStats(), LatencyStats(), LatencyStats())
+            for row in rows:
+                for stage, value in zip(stages, row):
+                    stage.append(value)
+            self.stage_latencies = stages
+
+    def add_target(self, row) -> None:
+        """One command's target (stamp, x, y, z): counted, and the path length grows."""
+        if self.targets:
+            last = self.targets[-1]
+            self.path_length += float(np.linalg.norm(np.subtract(row[1:], last[1:])))
+        self.targets.append(tuple(row))
+        self.commands_sent += 1
+
+    def add_stage_latency(self, sequencer: float, core: float, driver: float) -> None:
+        for stage, value in zip(self.stage_latencies, (sequencer, core, driver)):
+            stage.append(value)
 
 
 def tracking_errors(targets: np.ndarray, tools: np.ndarray) -> np.ndarray:
@@ -114,20 +156,22 @@ def summarize(data: SessionData) -> dict:
         np.asarray(data.raw_hands, dtype=float).reshape(-1, 4),
     )
     raw_errors = tracking_errors(raw_targets, tools) * 1000.0
-    latencies = np.asarray(data.latencies, dtype=float) * 1000.0
     settled = final_error(targets, tools)
 
     def pct(values, q):
         return round(float(np.percentile(values, q)), 3) if len(values) else None
 
-    path_length = float(np.sum(np.linalg.norm(np.diff(targets[:, 1:], axis=0), axis=1))) if len(targets) > 1 else 0.0
+    def ms(stats, q):
+        value = stats.percentile(q)
+        return None if value is None else round(value * 1000.0, 3)
+
     return {
         "frames_in": data.frames_in,
         "frames_out": data.frames_out,
         "frames_dropped": data.frames_dropped,
-        "commands_sent": len(targets),
+        "commands_sent": data.commands_sent,
         "commands_refused": data.commands_refused,
-        "hand_path_length_mm": round(path_length * 1000.0, 1),
+        "hand_path_length_mm": round(data.path_length * 1000.0, 1),
         "tracking_error_rms_mm": round(float(np.sqrt(np.mean(errors**2))), 3) if len(errors) else None,
         "tracking_error_p95_mm": pct(errors, 95),
         "tracking_error_max_mm": round(float(errors.max()), 3) if len(errors) else None,
@@ -135,24 +179,21 @@ def summarize(data: SessionData) -> dict:
         "overshoot_mm": round(overshoot(targets, tools) * 1000.0, 3),
         "raw_tracking_error_rms_mm": round(float(np.sqrt(np.mean(raw_errors**2))), 3) if len(raw_errors) else None,
         "raw_tracking_error_p95_mm": pct(raw_errors, 95),
-        "latency_p50_ms": pct(latencies, 50),
-        "latency_p99_ms": pct(latencies, 99),
-        "latency_samples": int(len(latencies)),
+        "latency_p50_ms": ms(data.latencies, 50),
+        "latency_p99_ms": ms(data.latencies, 99),
+        "latency_samples": len(data.latencies),
         "stage_latency_ms": _stage_figures(data.stage_latencies),
+        "window_samples": data.window,
     }
 
 
-def _stage_figures(rows):
+def _stage_figures(stages):
     """p50/p99 (ms) of each stage's cumulative latency from the sensor stamp."""
-    stages = np.asarray(rows, dtype=float).reshape(-1, 3) * 1000.0
-    if not len(stages):
+    if not len(stages[0]):
         return {}
     return {
-        name: {
-            "p50": round(float(np.percentile(stages[:, i], 50)), 3),
-            "p99": round(float(np.percentile(stages[:, i], 99)), 3),
-        }
-        for i, name in enumerate(("sequencer", "core", "driver"))
+        name: {"p50": round(stage.percentile(50) * 1000.0, 3), "p99": round(stage.percentile(99) * 1000.0, 3)}
+        for stage, name in zip(stages, ("sequencer", "core", "driver"))
     }
 
 

@@ -49,7 +49,7 @@ def test_summary_figures(tmp_path):
     summary = summarize(data)
     assert summary["tracking_error_rms_mm"] == pytest.approx(3.0)
     assert summary["final_error_mm"] == pytest.approx(3.0)
-    assert summary["latency_p50_ms"] == pytest.approx(2.0)
+    assert summary["latency_p50_ms"] == pytest.approx(2.0, abs=0.006)  # 10 us bins
     assert summary["hand_path_length_mm"] == pytest.approx(200.0)
     text = format_summary(summary, "/x/plot.png")
     assert "frames dropped           : 5" in text and "/x/plot.png" in text
@@ -98,3 +98,30 @@ def test_csv_replay_reads_rows_and_reports_bad_ones(tmp_path):
     (tmp_path / "bad.csv").write_text("t,x\n1,2\n")
     with pytest.raises(MotionSensorError, match="lacks columns"):
         read_csv(str(tmp_path / "bad.csv"))
+
+
+def test_a_day_long_session_keeps_bounded_memory_and_exact_running_figures():
+    """Samples beyond the window are dropped; the counts, the path length and the latency
+    percentiles still cover every command (percentiles to within the 10 us bins)."""
+    from motion_commander.latency_stats import LatencyStats
+
+    rng = np.random.default_rng(7)
+    data = SessionData(window=1000)
+    latencies = rng.gamma(4.0, 0.0003, 20_000)
+    for i, latency in enumerate(latencies):
+        t = i * 0.01
+        data.add_target((t, 0.001 * i, 0.0, 0.2))
+        data.tools.append((t, 0.001 * i, 0.0, 0.2))
+        data.latencies.append(latency)
+        data.add_stage_latency(latency / 3, latency / 2, latency)
+    assert len(data.targets) == len(data.tools) == 1000
+    summary = summarize(data)
+    assert summary["commands_sent"] == 20_000 and summary["latency_samples"] == 20_000
+    assert summary["hand_path_length_mm"] == pytest.approx(19_999.0)
+    for q, key in ((50, "latency_p50_ms"), (99, "latency_p99_ms")):
+        assert summary[key] == pytest.approx(1000 * np.percentile(latencies, q), abs=0.006)
+    assert summary["stage_latency_ms"]["driver"]["p99"] == pytest.approx(summary["latency_p99_ms"], abs=0.011)
+    stats = LatencyStats([2.5, 0.001])  # past the 1 s span: counted, read as the maximum
+    assert (
+        stats.over_span == 1 and stats.percentile(100) == 2.5 and stats.percentile(0) == pytest.approx(0.001, abs=1e-5)
+    )
