@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from motion_common.float_list import float_list
+from motion_common.rotations import is_unit_quaternion
 
 from .errors import HwInterfaceError
 from .protocol import CommandIndex, Result
@@ -307,7 +308,7 @@ class CommandDispatcher:
         if not (np.all(np.isfinite(p)) and np.all(np.isfinite(o))):
             return Result.NOT_FINITE, "position or orientation contains NaN or inf"
         # float32 on the wire: allow its rounding, nothing more.
-        if abs(np.linalg.norm(o) - 1.0) > 1e-3:
+        if not is_unit_quaternion(o):
             return Result.BAD_ORIENTATION, f"orientation norm is {np.linalg.norm(o):.4f}, not 1 (x, y, z, w)"
         if not self.workspace.contains(p):
             return Result.OUT_OF_WORKSPACE, (

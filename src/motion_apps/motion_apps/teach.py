@@ -31,6 +31,7 @@ from motion_commander.program import Program, ProgramError, Waypoint, program_pa
 from motion_common.atomic_file import remove_stale_temp_files
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema, read_yaml_file
+from motion_common.rotations import is_unit_quaternion, quaternion_norm
 
 COMMANDS = ("mark_waypoint", "grip", "release", "undo", "save")
 DEFAULT_PROGRAMS_DIR = os.path.join("output", "programs")
@@ -175,8 +176,8 @@ class TeachSession:
         values = position + orientation + joints
         if len(position) != 3 or len(orientation) != 4 or not joints or not all(map(math.isfinite, values)):
             return None, "the robot pose is invalid (non-finite or wrong length)"
-        norm = math.sqrt(sum(v * v for v in orientation))
-        if abs(norm - 1.0) > 1e-3:
+        norm = quaternion_norm(orientation)
+        if not is_unit_quaternion(orientation):
             return None, f"the robot orientation is not a unit quaternion (norm {norm:.4f})"
         return (position, [v / norm for v in orientation], joints), ""
 

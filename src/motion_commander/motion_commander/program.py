@@ -21,7 +21,6 @@ target with ``os.replace`` (atomic on POSIX) and fsyncs the folder: a crash at a
 leaves either the old or the new program, never a truncated or mixed one.
 """
 
-import math
 import os
 from dataclasses import dataclass, field
 
@@ -30,6 +29,7 @@ import yaml
 from motion_common.atomic_file import write_atomic
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema
+from motion_common.rotations import is_unit_quaternion, quaternion_norm
 
 FORMAT_VERSION = 1
 ACTIONS = ("none", "grip", "release")
@@ -177,8 +177,8 @@ def _parse_waypoint(entry, where: str) -> Waypoint:
     if not values["joints"]:
         raise ProgramError(f"{where}: 'joints' (rad) must hold the arm's joints")
     quat = values["pose"]["orientation"]
-    norm = math.sqrt(sum(v * v for v in quat))
-    if abs(norm - 1.0) > 1e-3:
+    norm = quaternion_norm(quat)
+    if not is_unit_quaternion(quat):
         raise ProgramError(
             f"{where}: pose.orientation {quat} is not a unit quaternion (norm {norm:.4f}); give x, y, z, w"
         )

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema
 from motion_sensor.devices.device import Backoff, HandDevice, reconnect_loop
 from motion_sensor.errors import DeviceUnavailable, MotionSensorError
@@ -111,43 +112,74 @@ class SpaceMouseDecoder:
         return False
 
 
+#: How deflections become motion: the one declaration of these parameters, shared by the
+#: SpaceMouse node's schema and ``RateConfig``.
+RATE_PARAMS = ParamSchema(
+    [
+        Param("full_scale_counts", 350.0, unit="counts", low=0, low_open=True, doc="HID counts at the cap's end stop"),
+        Param("deadzone", 0.08, unit="fraction of full scale", low=0, high=0.99, doc="ignored around the centre"),
+        Param("response_exponent", 2.0, low=0, low_open=True, high=5, doc="1 linear; 2 finer control near centre"),
+        Param("max_speed_mps", 0.15, unit="m/s", low=0, low_open=True, high=2, doc="speed at full deflection"),
+        Param(
+            "max_angular_speed_rps",
+            0.8,
+            unit="rad/s",
+            low=0,
+            low_open=True,
+            high=10,
+            doc="turn rate at full deflection",
+        ),
+        Param("workspace_half_size_m", 0.3, unit="m", low=0, low_open=True, high=5, doc="box around the start"),
+        Param("start_position_m", [0.0, 0.0, 0.2], unit="m", length=3, doc="virtual hand start"),
+        Param("max_step_s", 0.05, unit="s", low=0, low_open=True, high=1, doc="longest integrated gap"),
+        Param(
+            "hold_timeout_s",
+            0.25,
+            unit="s",
+            low=0,
+            low_open=True,
+            high=5,
+            doc="a deflection not repeated this long counts as released",
+        ),
+        Param(
+            "axis_signs",
+            [1, 1, 1, 1, 1, 1],
+            length=6,
+            item_kind=int,
+            low=-1,
+            high=1,
+            doc="x y z rx ry rz in REP 103: 1 or -1",
+        ),
+    ]
+)
+
+
 @dataclass
 class RateConfig:
-    """How deflections become motion (units in the names)."""
+    """How deflections become motion; defaults, units and ranges are ``RATE_PARAMS``."""
 
-    full_scale_counts: float = 350.0  # deflection read at the cap's end stop
-    deadzone: float = 0.08  # fraction of full scale ignored around the centre
-    response_exponent: float = 2.0  # 1 = linear; 2 = fine control near the centre
-    max_speed_mps: float = 0.15  # hand speed at full deflection
-    max_angular_speed_rps: float = 0.8  # hand turn rate at full deflection
-    workspace_half_size_m: float = 0.3  # the virtual hand stays within this box around start
-    start_position_m: tuple = (0.0, 0.0, 0.2)
-    max_step_s: float = 0.05  # longer gaps are integrated as this long
-    hold_timeout_s: float = 0.25  # a deflection not re-reported for this long is dropped
-    axis_signs: tuple = (1, 1, 1, 1, 1, 1)  # per REP 103 axis (x y z rx ry rz), to fix a device
+    full_scale_counts: float = RATE_PARAMS.field("full_scale_counts")
+    deadzone: float = RATE_PARAMS.field("deadzone")
+    response_exponent: float = RATE_PARAMS.field("response_exponent")
+    max_speed_mps: float = RATE_PARAMS.field("max_speed_mps")
+    max_angular_speed_rps: float = RATE_PARAMS.field("max_angular_speed_rps")
+    workspace_half_size_m: float = RATE_PARAMS.field("workspace_half_size_m")
+    start_position_m: tuple = RATE_PARAMS.field("start_position_m")
+    max_step_s: float = RATE_PARAMS.field("max_step_s")
+    hold_timeout_s: float = RATE_PARAMS.field("hold_timeout_s")
+    axis_signs: tuple = RATE_PARAMS.field("axis_signs")
+
+    def __post_init__(self):
+        self.validate()
 
     def validate(self) -> "RateConfig":
-        """Raise MotionSensorError naming the first bad value."""
-        positive = (
-            "full_scale_counts",
-            "response_exponent",
-            "max_speed_mps",
-            "max_angular_speed_rps",
-            "workspace_half_size_m",
-            "max_step_s",
-            "hold_timeout_s",
-        )
-        for name in positive:
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
-                raise MotionSensorError(f"spacemouse {name} must be a finite number > 0, got {value!r}")
-        if not 0 <= self.deadzone < 1:
-            raise MotionSensorError(f"spacemouse deadzone must be in [0, 1), got {self.deadzone!r}")
-        if len(self.start_position_m) != 3 or not np.all(np.isfinite(self.start_position_m)):
-            raise MotionSensorError(
-                f"spacemouse start_position_m must be 3 finite numbers, got {self.start_position_m!r}"
-            )
-        if len(self.axis_signs) != 6 or any(s not in (1, -1) for s in self.axis_signs):
+        """Raise MotionSensorError naming the first bad value (the declared ranges; and
+        each axis sign is 1 or -1, which a range cannot say)."""
+        try:
+            RATE_PARAMS.check_fields(self, "spacemouse")
+        except ParameterError as exc:
+            raise MotionSensorError(str(exc)) from None
+        if any(sign not in (1, -1) for sign in self.axis_signs):
             raise MotionSensorError(f"spacemouse axis_signs must be six values of 1 or -1, got {self.axis_signs!r}")
         return self
 
@@ -373,61 +405,25 @@ class SpaceMouseDevice(HandDevice):
     name = "spacemouse"
     default_frame_id = "spacemouse"
     bool_outputs = {"engage": "motion_commander/engage"}
-    params = ParamSchema(
-        [
-            Param("rate_hz", 100.0, unit="Hz", low=0, low_open=True, high=1000, doc="virtual hand poses per second"),
-            Param(
-                "full_scale_counts", 350.0, unit="counts", low=0, low_open=True, doc="HID counts at the cap's end stop"
-            ),
-            Param("deadzone", 0.08, unit="fraction of full scale", low=0, high=0.99, doc="ignored around the centre"),
-            Param("response_exponent", 2.0, low=0, low_open=True, high=5, doc="1 linear; 2 finer control near centre"),
-            Param("max_speed_mps", 0.15, unit="m/s", low=0, low_open=True, high=2, doc="speed at full deflection"),
-            Param(
-                "max_angular_speed_rps",
-                0.8,
-                unit="rad/s",
-                low=0,
-                low_open=True,
-                high=10,
-                doc="turn rate at full deflection",
-            ),
-            Param("workspace_half_size_m", 0.3, unit="m", low=0, low_open=True, high=5, doc="box around the start"),
-            Param("start_position_m", [0.0, 0.0, 0.2], unit="m", length=3, doc="virtual hand start"),
-            Param("max_step_s", 0.05, unit="s", low=0, low_open=True, high=1, doc="longest integrated gap"),
-            Param(
-                "hold_timeout_s",
-                0.25,
-                unit="s",
-                low=0,
-                low_open=True,
-                high=5,
-                doc="a deflection not repeated this long counts as released",
-            ),
-            Param(
-                "axis_signs",
-                [1, 1, 1, 1, 1, 1],
-                length=6,
-                item_kind=int,
-                low=-1,
-                high=1,
-                doc="x y z rx ry rz in REP 103: 1 or -1",
-            ),
-            Param("engage_button", 0, low=-1, high=31, doc="button held = engage; -1 none"),
-            Param("hand_type", "right", choices=("right", "left"), doc="hand.msg hand_type it stands in for"),
-            Param("vendor_id", -1, low=-1, high=0xFFFF, doc="USB vendor id; -1 the first known SpaceMouse"),
-            Param("product_id", -1, low=-1, high=0xFFFF, doc="USB product id; -1 the first known SpaceMouse"),
-            Param("hid_backend", "hidraw", choices=tuple(sorted(HID_BACKENDS)), doc="hidapi backend"),
-            Param("report_log", "", doc="replay this report log (lines 'SECONDS HEX') instead of a device"),
-            Param("record_reports", "", doc="write every report to this log"),
-        ]
+    params = RATE_PARAMS.merged(
+        ParamSchema(
+            [
+                Param(
+                    "rate_hz", 100.0, unit="Hz", low=0, low_open=True, high=1000, doc="virtual hand poses per second"
+                ),
+                Param("engage_button", 0, low=-1, high=31, doc="button held = engage; -1 none"),
+                Param("hand_type", "right", choices=("right", "left"), doc="hand.msg hand_type it stands in for"),
+                Param("vendor_id", -1, low=-1, high=0xFFFF, doc="USB vendor id; -1 the first known SpaceMouse"),
+                Param("product_id", -1, low=-1, high=0xFFFF, doc="USB product id; -1 the first known SpaceMouse"),
+                Param("hid_backend", "hidraw", choices=tuple(sorted(HID_BACKENDS)), doc="hidapi backend"),
+                Param("report_log", "", doc="replay this report log (lines 'SECONDS HEX') instead of a device"),
+                Param("record_reports", "", doc="write every report to this log"),
+            ]
+        )
     )
 
     def __init__(self, config, hid_module=None, **kw):
         super().__init__(config, **kw)
-        if any(sign not in (1, -1) for sign in self.config["axis_signs"]):
-            raise MotionSensorError(
-                f"spacemouse axis_signs must be six values of 1 or -1, got {self.config['axis_signs']!r}"
-            )
         self.rate_hz = self.config["rate_hz"]
         self.integrator = RateIntegrator(rate_config(self.config))
         self.hand_type = self.config["hand_type"]
