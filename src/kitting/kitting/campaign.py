@@ -60,7 +60,8 @@ class PartRecord:
     spawned: float
     predictions: Counter = field(default_factory=Counter)  # predicted class -> sightings
     pose_errors_mm: list[float] = field(default_factory=list)
-    events: list[str] = field(default_factory=list)
+    events: list[str] = field(default_factory=list)  # as the operator reads them
+    unverified: int = 0  # picks the camera could not confirm (no image since the lift)
     final_state: str = ""
     slot: str = ""
     resolved: float | None = None
@@ -85,7 +86,7 @@ class PartRecord:
     @property
     def unverified_picks(self) -> int:
         """Picks the camera could not confirm (no image after the lift)."""
-        return sum(event.startswith("picked: unverified") for event in self.events)
+        return self.unverified
 
     @property
     def success(self) -> bool:
@@ -120,9 +121,12 @@ class CampaignStats:
             record.predictions[class_name] += 1
             record.pose_errors_mm.append(1000.0 * math.hypot(best[1] - x, best[2] - y))
 
-    def add_event(self, part_id: int, event: str):
+    def add_event(self, part_id: int, event: str, verified: bool = True):
+        """One event of a part (its text as the operator reads it); ``verified`` False for a
+        pick the camera could not confirm."""
         if part_id in self.parts:
             self.parts[part_id].events.append(event)
+            self.parts[part_id].unverified += not verified
 
     def resolve(self, part_id: int, state: str, slot: str, now: float, reason: str = ""):
         record = self.parts[part_id]

@@ -119,6 +119,7 @@ class KittingEvent:
     reason: str = ""
     position: np.ndarray | None = None
     time: float = 0.0
+    verified: bool = True  # picked: the camera confirmed the part left the belt
 
 
 @dataclass
@@ -398,7 +399,7 @@ class KittingPicker:
             elif self._still_on_belt(latest, track.class_name, lifted_at):
                 raise PickMissed("missed: the part is still on the belt after the lift")
         self.holding = track
-        self._emit(track, "picked", unverified, grasp)
+        self._emit(track, "picked", unverified, grasp, verified=not unverified)
         return self.place_held()
 
     def _image_since(self, since: float) -> bool:
@@ -450,7 +451,7 @@ class KittingPicker:
         for track_id in [k for k in self.records if k not in live]:
             del self.records[track_id]
 
-    def _emit(self, track: Track, event: str, reason: str = "", position=None) -> KittingEvent:
+    def _emit(self, track: Track, event: str, reason: str = "", position=None, verified: bool = True) -> KittingEvent:
         item = KittingEvent(
             track.track_id,
             track.class_name,
@@ -458,6 +459,7 @@ class KittingPicker:
             reason,
             None if position is None else np.asarray(position, float),
             self.clock(),
+            verified,
         )
         self.on_event(item)
         return item

@@ -435,6 +435,7 @@ def test_closed_loop_pick_without_an_image_after_the_lift_is_placed_but_marked_u
         assert len(picked) == 1 and picked[0].reason.startswith("unverified: no camera image since the lift"), [
             (e.event, e.reason) for e in events
         ]
+        assert not picked[0].verified  # the typed flag the campaign counts, not the text
         assert events[-1].event == "placed"
         assert (_state(sim, part).state, _state(sim, part).slot) == ("resting", "nut_silver")
     finally:
@@ -629,7 +630,8 @@ def _stats_scenario():
         4: ["tracked", "planned", "picked: unverified: no camera image since the lift", "placed"],
     }.items():
         for event in events:
-            stats.add_event(part_id, event)
+            # The kitting node says whether the camera confirmed a pick (KittingEvent.verified).
+            stats.add_event(part_id, event, verified="unverified" not in event)
     stats.add_event(42, "picked")  # unknown part: ignored
     stats.resolve(1, "resting", "nut_yellow", 30.0)
     stats.resolve(2, "resting", "bolt_yellow", 40.0)
