@@ -22,6 +22,7 @@ from motion_common.params import Param, ParamSchema
 from .errors import HwInterfaceError
 from .protocol import Result
 from .robot_hw import DriverStatus, RobotDriver, UrdfModelMixin
+from .stream_follower import StreamFollower
 
 # UR safety modes as RTDEReceiveInterface.getSafetyMode() numbers them.
 SAFETY_MODES = {
@@ -129,6 +130,16 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                 low_open=True,
             ),
             Param(
+                "stream_acceleration",
+                200.0,
+                "rad/s^2",
+                "largest joint acceleration of the servoJ stream, enforced here whatever the client sends (the "
+                "servo setpoint also keeps the URDF speed limits and brakes in time at each target)",
+                low=0.0,
+                high=10000.0,
+                low_open=True,
+            ),
+            Param(
                 "stream_timeout",
                 0.1,
                 "s",
@@ -181,6 +192,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         linear_stop_deceleration: float = 10.0,
         servo_stop_deceleration: float = 10.0,
         stream_timeout: float = 0.1,
+        stream_acceleration: float = 200.0,
         gripper_output: int = 0,
         reconnect_attempts: int = 3,
         reconnect_backoff: float = 0.5,
@@ -207,6 +219,10 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         self.linear_stop_deceleration = float(linear_stop_deceleration)
         self.servo_stop_deceleration = float(servo_stop_deceleration)
         self.stream_timeout = float(stream_timeout)
+        self.stream_acceleration = float(stream_acceleration)
+        # The servo setpoint sent each period: it chases the latest target within the speed
+        # and acceleration limits, so no client (a stale stream, a burst) can make a lurch.
+        self._follower: StreamFollower | None = None
         self.gripper_output = int(gripper_output)
         self.reconnect_attempts = int(reconnect_attempts)
         self.reconnect_backoff = float(reconnect_backoff)
@@ -374,6 +390,12 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
             self._target = np.asarray(joints, dtype=float)
             self._target_time = time.monotonic()
             if not self._streaming.is_set():
+                # A new stream starts where the arm is, at rest.
+                self._follower = StreamFollower(
+                    self.kinematics.velocity_limits,
+                    np.asarray(self._receive.getActualQ(), dtype=float),
+                    self.stream_acceleration,
+                )
                 self._streaming.set()
                 self._stream_generation += 1
                 self._stream_thread = threading.Thread(
@@ -546,7 +568,8 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                         self._fault = "protective stop while streaming"
                         self._stop_streaming()
                         break
-                    target = list(map(float, self._target))
+                    self._follower.set_goal(self._target)
+                    target = list(map(float, self._follower.step(self.period)))
                     ok = control.servoJ(target, 0.0, 0.0, self.period, self.lookahead_time, self.gain)
                     self.servo_periods += 1
                     if not ok:
