@@ -7,6 +7,7 @@ from motion_common.interface import NodeInterface, Service, Topic
 from motion_common.params import Param, ParamSchema
 
 from .cell import DEFAULT_CELL
+from .vision_pipeline import VISION_SCHEMA
 
 __all__ = ["KITTING_CELL_SIM", "CAMERA_DRIVER", "VISION_NODE", "KITTING_NODE", "KITTING_TRIALS", "all_interfaces"]
 
@@ -95,12 +96,14 @@ VISION_NODE = NodeInterface(
     "kitting",
     "vision_node",
     "Detects parts in the cell camera's images (classical or ONNX detector) and publishes their belt poses.",
-    ParamSchema(
-        [
-            Param("cell", DEFAULT_CELL, doc="cell YAML"),
-            Param("intrinsics", "", doc="camera_info YAML; empty: from the CameraInfo topic"),
-            Param("detector_params", {}, doc="the detector's parameters"),
-        ]
+    VISION_SCHEMA.merged(
+        ParamSchema(
+            [
+                Param("cell", DEFAULT_CELL, doc="cell YAML"),
+                Param("intrinsics", "", doc="camera_info YAML; empty: from the CameraInfo topic"),
+                Param("detector_params", {}, doc="the detector's parameters"),
+            ]
+        )
     ),
     publishes=(
         _PARTS,

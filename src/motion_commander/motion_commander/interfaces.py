@@ -66,6 +66,15 @@ SESSION_MONITOR = NodeInterface(
         [
             Param("output_dir", "output", doc="folder for session_summary.json and session_paths.png"),
             Param("title", "teleop session", doc="plot title"),
+            Param(
+                "window_samples",
+                20_000,
+                "samples",
+                "of each path kept for the tracking figures and the plot (about 3 min at 110 Hz); counts and latency "
+                "figures cover the whole session",
+                low=100,
+                high=10_000_000,
+            ),
             Param("settle", 1.5, "s", "wait after the end for the arm to settle before reporting", low=0.0, high=60.0),
         ]
     ),

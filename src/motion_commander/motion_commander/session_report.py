@@ -9,9 +9,10 @@ import numpy as np
 
 from .latency_stats import LatencyStats
 
-#: Samples of each path a monitor keeps (about 9 minutes of a 110 Hz stream): a session that
-#: runs all day keeps bounded memory, and the tracking figures cover its last window.
-WINDOW_SAMPLES = 60_000
+#: Samples of each path a monitor keeps (about 3 minutes of a 110 Hz stream, ~13 MB in all):
+#: a session that runs all day keeps bounded memory, and the tracking figures cover its last
+#: window.
+WINDOW_SAMPLES = 20_000
 
 
 @dataclass
