@@ -199,10 +199,11 @@ def interfaces_markdown(interfaces: Iterable[NodeInterface], title: str = "Node 
     return "\n".join(lines).rstrip() + "\n"
 
 
-#: Graph names a running node has that are not its own interface: rospy's logging services
-#: and /rosout, and tf (global by design: frames, not topic names, tell robots apart).
+#: Graph names a running node has that are not its own interface: /rosout, tf (global by
+#: design: frames, not topic names, tell robots apart), and rospy's and tf2's own services.
 GRAPH_IGNORED = ("/rosout", "/tf", "/tf_static")
-_LOGGER_SERVICES = ("/get_loggers", "/set_logger_level")
+# Services every rospy node (its logger levels) or a tf2 listener (its frame list) serves.
+_INFRASTRUCTURE_SERVICES = ("/get_loggers", "/set_logger_level", "/tf2_frames")
 
 
 def graph_mismatches(interface: NodeInterface, node_name: str, system_state, remaps=None) -> list[str]:
@@ -223,7 +224,7 @@ def graph_mismatches(interface: NodeInterface, node_name: str, system_state, rem
         actual = {
             name
             for name, nodes in state
-            if node_name in nodes and name not in GRAPH_IGNORED and not name.endswith(_LOGGER_SERVICES)
+            if node_name in nodes and name not in GRAPH_IGNORED and not name.endswith(_INFRASTRUCTURE_SERVICES)
         }
         expected = {resolve(remaps.get(entry.name, entry.name), namespace, node_name): entry for entry in entries}
         undeclared = sorted(actual - set(expected))
