@@ -15,7 +15,7 @@ from motion_common.params import Param, ParamSchema
 from .errors import HwInterfaceError
 from .protocol import Result
 from .robot_hw import DriverStatus, RobotDriver, SimulatedScene, UrdfModelMixin
-from .stream_follower import StreamFollower
+from .stream_follower import STREAM_ACCELERATION_PARAM, StreamFollower
 from .trajectory import JointPath, joint_move_duration, trapezoid_duration
 
 # Fraction of the URDF velocity limits the simulated motors are capped at (see login()): the
@@ -111,16 +111,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 "max_acceleration", 3.0, "rad/s^2", "MoveJ/MoveL joint acceleration", low=0.0, high=100.0, low_open=True
             ),
             Param("cartesian_speed", 0.25, "m/s", "MoveL tool speed", low=0.0, high=3.0, low_open=True),
-            Param(
-                "stream_acceleration",
-                200.0,
-                "rad/s^2",
-                "largest joint acceleration of a streamed (SET_JOINTS) motion, enforced here whatever the client "
-                "sends, braking in time to stop at each target",
-                low=0.0,
-                high=10000.0,
-                low_open=True,
-            ),
+            STREAM_ACCELERATION_PARAM,
             Param(
                 "stream_timeout",
                 0.1,

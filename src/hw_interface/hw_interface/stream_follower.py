@@ -18,7 +18,21 @@ would.
 
 import numpy as np
 
-__all__ = ["StreamFollower"]
+from motion_common.params import Param
+
+__all__ = ["StreamFollower", "STREAM_ACCELERATION_PARAM"]
+
+#: The drivers' parameter of the follower's acceleration limit (one declaration for both).
+STREAM_ACCELERATION_PARAM = Param(
+    "stream_acceleration",
+    200.0,
+    "rad/s^2",
+    "largest joint acceleration of a streamed (SET_JOINTS) motion, enforced in the driver whatever the client "
+    "sends (the setpoint also keeps the URDF speed limits and brakes in time to stop at each target)",
+    low=0.0,
+    high=10000.0,
+    low_open=True,
+)
 
 
 class StreamFollower:

@@ -22,7 +22,7 @@ from motion_common.params import Param, ParamSchema
 from .errors import HwInterfaceError
 from .protocol import Result
 from .robot_hw import DriverStatus, RobotDriver, UrdfModelMixin
-from .stream_follower import StreamFollower
+from .stream_follower import STREAM_ACCELERATION_PARAM, StreamFollower
 
 # UR safety modes as RTDEReceiveInterface.getSafetyMode() numbers them.
 SAFETY_MODES = {
@@ -129,16 +129,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                 high=40.0,
                 low_open=True,
             ),
-            Param(
-                "stream_acceleration",
-                200.0,
-                "rad/s^2",
-                "largest joint acceleration of the servoJ stream, enforced here whatever the client sends (the "
-                "servo setpoint also keeps the URDF speed limits and brakes in time at each target)",
-                low=0.0,
-                high=10000.0,
-                low_open=True,
-            ),
+            STREAM_ACCELERATION_PARAM,
             Param(
                 "stream_timeout",
                 0.1,

@@ -4,6 +4,8 @@ It holds what more than one layer needs and none of them owns, and imports none 
 framework's packages, so every other package may import it without breaking the one-way
 layering. Its modules, by role:
 
+- ``lazy_exports``: the public names of every package of the framework, imported from
+  their module on first use (PEP 562);
 - node interfaces: ``interface`` (``NodeInterface``: the one declaration of a node's
   parameters, topics and services, relative names) and ``ros_interface`` (publishers,
   subscribers and services made from it: a ROS edge);
@@ -28,7 +30,7 @@ motion_common`` loads neither pinocchio nor rospy. ``float_list`` is not among t
 function shares its module's name, so use ``motion_common.float_list.float_list``.
 """
 
-from importlib import import_module as _import_module
+from .lazy_exports import lazy_exports
 
 # Public name -> the submodule that defines it.
 _PUBLIC = {
@@ -74,16 +76,4 @@ _PUBLIC = {
 }
 __all__ = list(_PUBLIC)
 
-
-def __getattr__(name):
-    """Imports the submodule that defines ``name`` on first use (PEP 562)."""
-    module = _PUBLIC.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(_import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value  # the next look-up finds it without this function
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())

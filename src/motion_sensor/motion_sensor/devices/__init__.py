@@ -25,7 +25,7 @@ Its modules:
 - ``webcam_device``: a webcam or video file as a device.
 """
 
-from importlib import import_module as _import_module
+from motion_common.lazy_exports import lazy_exports
 
 # Public name -> the module of this subpackage that defines it.
 _PUBLIC = {
@@ -79,16 +79,4 @@ _PUBLIC = {
 }
 __all__ = list(_PUBLIC)
 
-
-def __getattr__(name):
-    """Imports the submodule that defines ``name`` on first use (PEP 562)."""
-    module = _PUBLIC.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(_import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value  # the next look-up finds it without this function
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _PUBLIC, globals())
