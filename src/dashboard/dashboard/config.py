@@ -36,5 +36,18 @@ DASHBOARD_PARAMETERS = ParamSchema(
         Param("campaign_trials", 6, "trials", "default trials of a campaign started here", low=1, high=1000),
         Param("engage_mode", "", doc="the core's engage mode (empty: read /motion_commander/engage)"),
         Param("title", "Motion teleop dashboard", doc="page title"),
+        Param(
+            "application",
+            "auto",
+            doc="the session's application, which decides the panels shown (auto: from the running graph's topics)",
+            choices=("auto", "teleop", "teach", "kitting"),
+        ),
+        Param("device", "", doc="the session's input device (its launch's device argument; empty: not given)"),
+        Param("urdf", "", doc="robot URDF of the 3-D view and the joint limits (empty: /robot_description)"),
+        Param("scene_rate", 10.0, "Hz", "3-D view refresh rate (a timer, never per message)", low=1.0, high=30.0),
+        Param("camera_rate", 2.0, "Hz", "camera image refresh rate on the page", low=0.2, high=10.0),
+        Param("series_points", 600, "points", "samples kept per time series", low=10, high=100000),
+        Param("series_interval_s", 0.1, "s", "minimum time between two kept samples of a series", low=0.0, high=10.0),
+        Param("events", 200, "events", "events kept in the log", low=10, high=10000),
     ]
 )

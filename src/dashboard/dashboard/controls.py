@@ -8,6 +8,8 @@ from dataclasses import dataclass
 
 from .status_style import is_engaged
 
+__all__ = ["ControlState", "control_states", "RatioDecision", "check_speed_ratio", "CONFIRM_FACTOR"]
+
 
 @dataclass(frozen=True)
 class ControlState:
@@ -92,3 +94,54 @@ def control_states(
         ),
         "campaign_end": _first((not campaign_job, "no campaign is running")),
     }
+
+
+@dataclass(frozen=True)
+class RatioDecision:
+    """What to do with a speed ratio the operator typed: ``value`` to send when ``ok``;
+    ``confirm`` when the change is large enough to ask first; ``message`` for the operator
+    (why it was refused, or what the confirmation is about)."""
+
+    ok: bool
+    value: float | None = None
+    confirm: bool = False
+    message: str = ""
+
+
+# A new ratio above this multiple of the one in force is confirmed first: the tool would
+# move more than twice as far per hand motion as the operator is used to. Lowering the
+# ratio only slows the tool, so it is never held up by a question.
+CONFIRM_FACTOR = 2.0
+
+
+def _range_text(low, high, low_open) -> str:
+    return f"{'more than' if low_open else 'from'} {low:g} {'and up to' if low_open else 'to'} {high:g}"
+
+
+def check_speed_ratio(text, current, low: float, high: float, low_open: bool = False) -> RatioDecision:
+    """Check a typed speed ratio against its declared range [low, high] (``low_open``: low
+    itself excluded) and the ratio in force (``current``, None when unknown).
+
+    Every refusal names the accepted range; no Python exception text reaches the operator.
+    """
+    accepted = f"accepted: a number {_range_text(low, high, low_open)}"
+    raw = "" if text is None else str(text).strip()
+    if not raw:
+        return RatioDecision(False, message=f"enter a speed ratio ({accepted})")
+    try:
+        value = float(raw)
+    except ValueError:
+        return RatioDecision(False, message=f"'{raw}' is not a number ({accepted})")
+    if value != value or value in (float("inf"), float("-inf")):
+        return RatioDecision(False, message=f"'{raw}' is not a finite number ({accepted})")
+    if value < low or value > high or (low_open and value == low):
+        return RatioDecision(False, message=f"{value:g} is out of range ({accepted})")
+    if current is not None and current > 0 and value > CONFIRM_FACTOR * current:
+        return RatioDecision(
+            True,
+            value,
+            confirm=True,
+            message=f"raise the speed ratio from {current:.2f} to {value:.2f} ({value / current:.1f}x)? "
+            "The tool will move that much farther per hand motion.",
+        )
+    return RatioDecision(True, value)

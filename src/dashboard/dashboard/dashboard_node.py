@@ -8,6 +8,7 @@ shutdown from elsewhere (rosnode kill) stops the web server in turn.
 
 import json
 import os
+import tempfile
 import threading
 
 import numpy as np
@@ -17,15 +18,17 @@ from std_msgs.msg import Bool, Float64, String
 
 from dashboard.interfaces import DASHBOARD
 from motion_commander.config import TELEOP_PARAMETERS
-from motion_common.errors import ParameterError
+from motion_common.errors import ParameterError, RobotModelError
 from motion_common.ros_interface import publisher, service_proxy, subscriber
 from motion_common.ros_params import load_private_params
 
 from . import programs as program_files
 from .access import check_access_config, load_token
+from .application import detect_application
 from .config import DASHBOARD_PARAMETERS
+from .controls import check_speed_ratio
 from .jobs import Job, campaign_command, run_program_command
-from .readings import driver_status, sequencer_counters, tool_reading
+from .readings import campaign_line, driver_status, kitting_event_line, sequencer_counters, tool_reading
 from .state import DashboardState
 
 LATCH_SERVICE = "motion_controller/latch_stop"
@@ -41,7 +44,13 @@ class DashboardNode:
             path_points=params["path_points"],
             path_interval_s=params["path_interval_s"],
             latency_window=params["latency_window"],
+            series_points=params["series_points"],
+            series_interval_s=params["series_interval_s"],
+            events=params["events"],
         )
+        self.robot_view = load_robot_view(params["urdf"])
+        auto = params["application"] == "auto"
+        self.state.update(application=None if auto else params["application"], launch_device=params["device"])
         self.jobs_lock = threading.Lock()
         self._jobs = {"program": None, "campaign": None}
         self.fallback_estop = False
@@ -58,8 +67,8 @@ class DashboardNode:
         def subscribe(name, callback, **kwargs):
             return subscriber(DASHBOARD, name, callback, **kwargs)
 
-        subscribe("motion_commander/status", lambda m: s.set("status", int(m.data)), queue_size=10)
-        subscribe("motion_controller/stop_latched", lambda m: s.set("stop_latched", bool(m.data)), queue_size=5)
+        subscribe("motion_commander/status", lambda m: s.set_status(m.data), queue_size=10)
+        subscribe("motion_controller/stop_latched", self.on_stop_latched, queue_size=5)
         subscribe("motion_commander/speed_ratio", lambda m: s.set("speed_ratio", float(m.data)), queue_size=5)
         subscribe("motion_sensor/filter", lambda m: s.set("filter", m.data), queue_size=5)
         subscribe("motion_sensor/active_device", lambda m: s.set("device", m.data), queue_size=5)
@@ -74,6 +83,9 @@ class DashboardNode:
         subscribe("motion_controller/status", self.on_driver, queue_size=5)
         subscribe("kitting_trials/progress", lambda m: self.on_campaign("campaign_progress", m), queue_size=5)
         subscribe("kitting_trials/result", lambda m: self.on_campaign("campaign_result", m), queue_size=5)
+        subscribe("kitting/events", self.on_kitting_event, queue_size=20)
+        # One frame at a time, the newest: a slow page never queues camera frames.
+        subscribe("kitting/vision/annotated", self.on_camera, queue_size=1, buff_size=2**22)
         self.poll(None)
         self.poll_timer = rospy.Timer(rospy.Duration(1.0), self.poll)
 
@@ -83,18 +95,32 @@ class DashboardNode:
 
     def on_gesture(self, msg):
         self.state.set("gesture", {"name": msg.name, "confidence": float(msg.confidence)})
+        self.state.log("gesture", f"{msg.name} ({float(msg.confidence):.2f})")
+
+    def on_stop_latched(self, msg):
+        latched = bool(msg.data)
+        self.state.set_watched("stop_latched", latched, "stop", "stop latched" if latched else "stop released")
 
     def on_joints(self, msg):
+        # Copies only: forward kinematics runs on the page's timer, never per message.
         self.state.set("joints", [float(np.degrees(v)) for v in msg.position])
+        self.state.set_joints(msg.name, msg.position)
 
     def on_tool(self, msg):
         p, o = msg.pose.position, msg.pose.orientation
         self.state.set("tool", tool_reading((p.x, p.y, p.z), (o.x, o.y, o.z, o.w)))
-        self.state.add_path_point("tool", msg.header.stamp.to_sec(), (p.x, p.y, p.z))
+        self.state.add_tool(msg.header.stamp.to_sec(), (p.x, p.y, p.z))
 
     def on_target(self, msg):
         p = msg.pose.position
-        self.state.add_path_point("hand", msg.header.stamp.to_sec(), (p.x, p.y, p.z))
+        self.state.add_target(msg.header.stamp.to_sec(), (p.x, p.y, p.z))
+
+    def on_kitting_event(self, msg):
+        if msg.event != "tracked":  # every part is tracked many times a second: not news
+            self.state.log("kitting", kitting_event_line(msg.event, msg.class_name, msg.track_id, msg.reason))
+
+    def on_camera(self, msg):
+        self.state.set_camera(msg.format, msg.data)
 
     def on_diagnostics(self, msg):
         for status in msg.status:
@@ -102,19 +128,33 @@ class DashboardNode:
                 self.state.set("sequencer", sequencer_counters((kv.key, kv.value) for kv in status.values))
 
     def on_driver(self, msg):
-        self.state.set("driver", driver_status([(kv.key, kv.value) for kv in msg.values], msg.message, msg.level))
+        driver = driver_status([(kv.key, kv.value) for kv in msg.values], msg.message, msg.level)
+        problem = driver["fault"] or ("protective stop" if driver["protective_stop"] else "")
+        self.state.set("driver", driver)
+        # The reading changes with every message; the log gets a line only when the fault does.
+        self.state.set_watched("driver_problem", problem, "driver", problem or "no fault")
 
     def on_campaign(self, key, msg):
         try:
-            self.state.set(key, json.loads(msg.data))
+            data = json.loads(msg.data)
         except ValueError as exc:
             rospy.logwarn_throttle(10.0, "dashboard: unreadable %s ignored: %s", key, exc)
+            return
+        self.state.set(key, data)
+        self.state.log("campaign", campaign_line(key, data))
 
     def poll(self, _event):
-        """Once a second: which services exist, and the core's engage mode."""
+        """Once a second: which services exist, the core's engage mode and, unless the
+        launch named it, the application (from the topics published now)."""
         self.state.update(server_up=_service_exists(LATCH_SERVICE), kitting_cell=_service_exists(SPAWN_SERVICE))
         mode = self.params["engage_mode"] or rospy.get_param("motion_commander/engage", "")
         self.state.set("engage_mode", mode)
+        if self.params["application"] == "auto":
+            try:
+                topics = [name for name, _ in rospy.get_published_topics()]
+            except Exception:  # noqa: BLE001 - the master may be gone during shutdown: keep the last answer
+                return
+            self.state.set("application", detect_application(topics))
 
     # -- actions (called by the page, off its event loop) ----------------------------------------
     def stop(self) -> str:
@@ -146,14 +186,26 @@ class DashboardNode:
         self.engage_pub.publish(Bool(bool(on)))
         return "engage requested" if on else "disengage requested"
 
+    def check_speed_ratio(self, text):
+        """The page's typed ratio against the core's declared range and the ratio in force
+        (controls.check_speed_ratio); a refusal goes to the event log."""
+        param = TELEOP_PARAMETERS.params["speed_ratio"]
+        decision = check_speed_ratio(text, self.state.get("speed_ratio"), param.low, param.high, param.low_open)
+        if not decision.ok:
+            self.state.log("refused", f"speed ratio: {decision.message}")
+        return decision
+
     def set_speed_ratio(self, ratio) -> str:
-        """Ask the core for a new ratio; /motion_commander/speed_ratio confirms it."""
-        try:
-            TELEOP_PARAMETERS.params["speed_ratio"].check(float(ratio), "speed ratio")
-        except (ParameterError, TypeError, ValueError) as exc:
-            return f"refused: {exc}"
-        self.ratio_pub.publish(Float64(float(ratio)))
-        return f"speed ratio {float(ratio):.2f} requested"
+        """Ask the core for a new ratio (checked again here: the last word before the
+        topic); /motion_commander/speed_ratio confirms it."""
+        param = TELEOP_PARAMETERS.params["speed_ratio"]
+        decision = check_speed_ratio(ratio, None, param.low, param.high, param.low_open)
+        if not decision.ok:
+            self.state.log("refused", f"speed ratio: {decision.message}")
+            return f"refused: {decision.message}"
+        self.ratio_pub.publish(Float64(decision.value))
+        self.state.log("operator", f"speed ratio {decision.value:.2f} requested")
+        return f"speed ratio {decision.value:.2f} requested"
 
     def set_filter(self, name: str) -> str:
         """Ask the sequencer to switch filter; /motion_sensor/filter confirms it."""
@@ -228,6 +280,31 @@ class DashboardNode:
             jobs = [job for job in self._jobs.values() if job is not None]
         for job in jobs:
             job.stop(timeout=5.0)
+
+
+def load_robot_view(urdf_path: str):
+    """The robot model of the 3-D view from ``urdf_path``, or from the session's
+    /robot_description when empty; None (and a warning) when neither gives one: the page
+    then shows the view's reason instead of an arm."""
+    from .robot_view import RobotView
+
+    try:
+        if urdf_path:
+            return RobotView(urdf_path)
+        text = rospy.get_param("/robot_description", "")
+        if not text:
+            rospy.logwarn("dashboard: no ~urdf and no /robot_description: the 3-D view shows no arm")
+            return None
+        # RobotKinematics reads a file: the description goes through a private temporary one.
+        with tempfile.NamedTemporaryFile("w", suffix=".urdf", encoding="utf-8", delete=False) as stream:
+            stream.write(text)
+        try:
+            return RobotView(stream.name)
+        finally:
+            os.unlink(stream.name)
+    except RobotModelError as exc:
+        rospy.logwarn("dashboard: the 3-D view shows no arm: %s", exc)
+        return None
 
 
 def machine_names(host: str) -> list:

@@ -17,8 +17,9 @@ def _in(name, type_name, doc):
 DASHBOARD = NodeInterface(
     "dashboard",
     "dashboard",
-    "The operator's web page (NiceGUI): live readings of the session and its controls (engage, e-stop and "
-    "release, speed ratio, filter, programs, kitting campaigns).",
+    "The operator's web console (NiceGUI): a 3-D view of the arm, the hand and tool paths, time series, an "
+    "event log, the kitting camera and the session's controls (engage, e-stop and release, speed ratio, "
+    "filter, programs, kitting campaigns).",
     DASHBOARD_PARAMETERS,
     publishes=(
         Topic("motion_commander/engage", "std_msgs/Bool", "the clutch button"),
@@ -44,6 +45,12 @@ DASHBOARD = NodeInterface(
         _in("motion_controller/status", "diagnostic_msgs/DiagnosticStatus", "the driver's state"),
         _in("kitting_trials/progress", "std_msgs/String", "campaign progress"),
         _in("kitting_trials/result", "std_msgs/String", "campaign result"),
+        _in("kitting/events", "kitting/KittingEvent", "the kitting cell's picks, places and misses (event log)"),
+        _in(
+            "kitting/vision/annotated",
+            "sensor_msgs/CompressedImage",
+            "the kitting camera with its detections drawn (camera panel)",
+        ),
     ),
     calls=(
         Service("motion_controller/latch_stop", "std_srvs/SetBool", "latch or release the stop"),

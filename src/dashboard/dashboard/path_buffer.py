@@ -3,6 +3,8 @@ path (/motion_controller/tool_pose), kept short and thinned for the page's plot.
 
 from collections import deque
 
+__all__ = ["PathBuffer"]
+
 
 class PathBuffer:
     """Two bounded paths of (t, x, y, z); a point closer than ``min_interval_s`` in time to
@@ -33,3 +35,7 @@ class PathBuffer:
     def series(self) -> dict[str, list[list[float]]]:
         """Top view for the plot: name -> [[x, y], ...] in mm, oldest first."""
         return {name: [[1000.0 * p[1], 1000.0 * p[2]] for p in path] for name, path in self._paths.items()}
+
+    def points(self, name: str) -> list[list[float]]:
+        """Path ``name`` in 3-D for the robot view: [[x, y, z], ...] in m, oldest first."""
+        return [[p[1], p[2], p[3]] for p in self._paths[name]]

@@ -86,3 +86,55 @@ def tool_reading(position, quaternion) -> dict[str, list]:
         "xyz_mm": [1000.0 * float(v) for v in position],
         "rpy_deg": [float(np.degrees(a)) for a in (roll, pitch, yaw)],
     }
+
+
+def device_label(launch_device: str, active_device: str | None, application: str = "teleop") -> str:
+    """The input device as the operator knows it: the session launch's ``device`` argument
+    (replay, leap, webcam, ...), with the sequencer's active input after it when that adds
+    something. The sequencer names a lone input "default", which says nothing to an
+    operator, so it is never shown alone."""
+    launch_device = (launch_device or "").strip()
+    active = (active_device or "").strip()
+    if application == "kitting" and launch_device.isdigit():
+        launch_device = f"camera /dev/video{launch_device}"
+    informative = active and active != "default" and active != launch_device
+    if launch_device:
+        return f"{launch_device} (input {active})" if informative else launch_device
+    if informative:
+        return active
+    if active:
+        return "one input (the launch did not name the device)"
+    return "-"
+
+
+def image_data_url(data: bytes, image_format: str) -> str | None:
+    """A compressed camera frame (sensor_msgs/CompressedImage: ``format`` "jpeg" or "png",
+    possibly with a prefix such as "bgr8; jpeg compressed bgr8") as a data URL an <img> shows
+    directly; None for a format a browser cannot show or an empty frame."""
+    import base64
+
+    kind = str(image_format).lower()
+    mime = "image/jpeg" if ("jpeg" in kind or "jpg" in kind) else "image/png" if "png" in kind else None
+    if mime is None or not data:
+        return None
+    return f"data:{mime};base64,{base64.b64encode(bytes(data)).decode('ascii')}"
+
+
+def campaign_line(key: str, data: dict) -> str:
+    """A kitting campaign's progress or result (kitting_trials' JSON) as one log line."""
+    if not isinstance(data, dict):
+        return f"{key}: unreadable"
+    if "error" in data:
+        return f"campaign error: {data['error']}"
+    per_class = data.get("per_class") or {}
+    picked = sum(int(row.get("picked", 0)) for row in per_class.values() if isinstance(row, dict))
+    placed = sum(int(row.get("placed", 0)) for row in per_class.values() if isinstance(row, dict))
+    if key == "campaign_result":
+        return f"campaign done: {data.get('successes', placed)}/{data.get('trials', '?')} placed"
+    return f"trial {data.get('done', '?')}/{data.get('trials', '?')} done: {picked} picked, {placed} placed so far"
+
+
+def kitting_event_line(event: str, class_name: str, track_id: int, reason: str = "") -> str:
+    """One /kitting/events message (pick, place, miss, ...) as a log line."""
+    text = f"{event} {class_name or 'part'} #{int(track_id)}"
+    return f"{text}: {reason}" if reason else text

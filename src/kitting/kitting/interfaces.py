@@ -113,6 +113,11 @@ VISION_NODE = NodeInterface(
             "registration and detection state",
             latched=True,
         ),
+        Topic(
+            "kitting/vision/annotated",
+            "sensor_msgs/CompressedImage",
+            "the camera image with the detections drawn, JPEG, at most 2 Hz (for the operator's dashboard)",
+        ),
     ),
     subscribes=(_IMAGE, Topic(_INFO.name, _INFO.type, _INFO.doc, optional=True)),
 )

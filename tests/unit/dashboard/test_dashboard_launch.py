@@ -41,3 +41,28 @@ def test_dashboard_launch_declares_its_arguments_binds_locally_without_a_token_b
     declared = {arg.get("name"): arg.get("default") for arg in parse("dashboard.launch").findall("arg")}
     assert all(key in declared for key in OWN)
     assert declared["dashboard_host"] == "127.0.0.1" and declared["dashboard_token"] == ""
+
+
+APPLICATION_OF = {
+    "teleop_sim.launch": "teleop",
+    "teach_sim.launch": "teach",
+    "kitting_sim.launch": "kitting",
+    "kitting_ur.launch": "kitting",
+}
+
+
+def test_dashboard_launch_takes_application_device_and_urdf_from_the_session():
+    root = parse("dashboard.launch")
+    declared = {arg.get("name"): arg.get("default") for arg in root.findall("arg")}
+    assert declared["application"] == "auto" and declared["device"] == "" and declared["urdf"] == ""
+    params = {param.get("name"): param.get("value") for param in root.find("node").findall("param")}
+    assert params["application"] == "$(arg application)"
+    assert params["device"] == "$(arg device)"
+    assert params["urdf"] == "$(arg urdf)"
+
+
+@pytest.mark.parametrize("name", sorted(APPLICATION_OF))
+def test_each_session_tells_the_dashboard_its_application(name):
+    direct = [inc for inc in parse(name).findall("include") if inc.get("file", "").endswith("/dashboard.launch")]
+    given = {arg.get("name"): arg.get("value") for arg in direct[0].findall("arg")}
+    assert given == {"application": APPLICATION_OF[name]}

@@ -126,3 +126,66 @@ def test_every_status_has_a_name_and_colour():
     assert status_view(None) == ("NO STATUS", "grey")
     assert status_view(99) == ("UNKNOWN (99)", "grey")
     assert is_engaged(12) and is_engaged(3) and not is_engaged(1) and not is_engaged(11) and not is_engaged(None)
+
+
+def test_status_changes_are_logged_and_charted_repeats_are_not_logged():
+    clock = FakeClock()
+    state = DashboardState(clock=clock, wall_clock=lambda: 0.0, series_interval_s=0.0)
+    state.set_status(1)
+    clock.now += 0.1
+    state.set_status(1)
+    clock.now += 0.1
+    state.set_status(int(TeleopStatus.ESTOP))
+    snap = state.snapshot()
+    assert snap["values"]["status"] == int(TeleopStatus.ESTOP)
+    texts = [line.split(None, 2)[2] for line in snap["events"]]
+    assert texts == ["ESTOP", TeleopStatus(1).name]  # newest first, one line per change
+    assert [v for _, v in snap["series"]["status"]] == [1.0, 1.0, float(TeleopStatus.ESTOP)]
+
+
+def test_watched_values_log_only_their_changes():
+    state = DashboardState(wall_clock=lambda: 0.0)
+    for latched in (False, False, True, True, False):
+        state.set_watched("stop_latched", latched, "stop", "stop latched" if latched else "stop released")
+    assert [line.split(None, 2)[2] for line in state.snapshot()["events"]] == [
+        "stop released",
+        "stop latched",
+        "stop released",
+    ]
+
+
+def test_robot_pose_carries_joints_target_and_the_tool_path_in_metres():
+    clock = FakeClock()
+    state = DashboardState(clock=clock, path_interval_s=0.0)
+    assert state.robot_pose()["joint_state"] is None
+    state.set_joints(["a", "b"], [0.1, 0.2])
+    state.add_target(1.0, (0.1, 0.2, 0.3))
+    state.add_tool(1.0, (0.1, 0.2, 0.31))
+    state.add_tool(1.1, (0.1, 0.2, 0.32))
+    pose = state.robot_pose()
+    assert pose["joint_state"] == (("a", "b"), (0.1, 0.2)) and pose["joint_version"] == 1
+    assert pose["target"] == (0.1, 0.2, 0.3)
+    assert pose["tool_path"] == [[0.1, 0.2, 0.31], [0.1, 0.2, 0.32]]
+    tracking = state.snapshot()["series"]["tracking_mm"]
+    assert tracking and tracking[0][1] == pytest.approx(10.0)
+
+
+def test_the_camera_keeps_only_its_latest_frame():
+    state = DashboardState()
+    assert state.camera() is None
+    state.set_camera("jpeg", b"one")
+    state.set_camera("jpeg", b"two")
+    assert state.camera() == (2, "jpeg", b"two")
+    assert state.snapshot()["camera_frames"] == 2
+
+
+def test_event_log_and_series_stay_bounded():
+    clock = FakeClock()
+    state = DashboardState(clock=clock, series_points=10, series_interval_s=0.0, events=10)
+    for i in range(1000):
+        clock.now += 0.01
+        state.add_latency(0.001 * i)
+        state.log("gesture", f"g{i}")
+    snap = state.snapshot()
+    assert len(snap["series"]["latency_ms"]) == 10 and len(snap["events"]) == 10
+    assert snap["events"][0].endswith("g999")
