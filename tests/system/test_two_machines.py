@@ -5,7 +5,7 @@ ROS_IP (scripts/two_machines.py). The session must run across the link: checked 
 robot side by tests/tools/two_machines_check.py.
 
 Both namespaces share the machine's clock, so sensor stamps compare without chrony here;
-two real PCs need it (README, "Two machines").
+two real PCs need it (docs/running.md, "Two machines").
 
 Needs root and `ip netns` (CI runs as root); skipped with the reason otherwise. Sources
 catkin_ws/devel/setup.bash itself. About 15-25 s. Run with the ROS lock held:

@@ -1,6 +1,6 @@
 """The one-way layering rule, enforced by parsing every import of the framework's code.
 
-Layers, lowest first (README, "Layering"):
+Layers, lowest first (docs/architecture.md, "Layers"):
   motion_common                 imports none of the framework's packages
   motion_sensor, hw_interface   import motion_common only, never each other
   motion_commander (the core)   may import the three above
@@ -115,7 +115,7 @@ def violations(package, path, known):
 
 def test_every_package_has_a_layer():
     unknown = [p for p in framework_packages() if p not in ALLOWED and p not in APPLICATIONS]
-    assert unknown == [], f"add {unknown} to ALLOWED or APPLICATIONS in this test (and to the README)"
+    assert unknown == [], f"add {unknown} to ALLOWED or APPLICATIONS in this test (and to docs/architecture.md)"
 
 
 @pytest.mark.parametrize("package", framework_packages())
