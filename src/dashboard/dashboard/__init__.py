@@ -7,10 +7,13 @@ Its modules, by role:
   services; see ``motion_common.interface``), from which docs/interfaces.md is generated;
 - state and readings (plain Python, unit-tested): ``state`` (``DashboardState``: ROS
   callbacks write it, the page reads snapshots), ``path_buffer`` (the hand and tool
-  paths), ``readings`` (message contents as the page shows them), ``status_style`` (the
-  teleop status's name and colour);
+  paths), ``series`` (the bounded time series: status, latency, tracking error),
+  ``event_log`` (the bounded log, newest first), ``robot_view`` (the arm's links and
+  joint readings from the URDF's forward kinematics), ``readings`` (message contents as
+  the page shows them), ``status_style`` (the teleop status's name and colour);
 - rules and actions (plain Python): ``controls`` (which controls can act now, and why
-  not), ``jobs`` (program runs and kitting campaigns as child processes), ``programs``
+  not; the check of a typed speed ratio), ``application`` (which panels each
+  application shows), ``jobs`` (program runs and kitting campaigns as child processes), ``programs``
   (the taught programs on disk), ``access`` (who may open the page), ``config`` (the
   node's parameters);
 - ``page``: the NiceGUI page;
@@ -27,6 +30,18 @@ from motion_common.lazy_exports import lazy_exports
 _PUBLIC = {
     "DashboardState": "state",
     "PathBuffer": "path_buffer",
+    "SeriesWindow": "series",
+    "Telemetry": "series",
+    "EventLog": "event_log",
+    "RobotView": "robot_view",
+    "segment_pose": "robot_view",
+    "joint_readings": "robot_view",
+    "detect_application": "application",
+    "panels_for": "application",
+    "device_label": "readings",
+    "image_data_url": "readings",
+    "check_speed_ratio": "controls",
+    "RatioDecision": "controls",
     "LatencyWindow": "readings",
     "sequencer_counters": "readings",
     "driver_status": "readings",

@@ -1,7 +1,9 @@
-"""Which controls can act now, and why not: every rule of the page in one function.
+"""Which controls can act now, and why not: every rule of the page in one function; and
+the check of what the operator types (the speed ratio) before anything is sent.
 
 A control that cannot act is disabled and its reason is shown next to it (refusing a
-replay while teleop is engaged is one such rule). STOP is never disabled.
+replay while teleop is engaged is one such rule). STOP is never disabled. A typed value
+that cannot be used is refused with a message naming the accepted range.
 """
 
 from dataclasses import dataclass

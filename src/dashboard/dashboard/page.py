@@ -183,11 +183,11 @@ class DashboardPage:
                     {
                         "animation": False,
                         "legend": {"data": ["latency (ms)", "tracking error (mm)"], "top": 0},
-                        "grid": {"left": 50, "right": 60, "top": 40, "bottom": 25},
+                        "grid": {"left": 60, "right": 65, "top": 40, "bottom": 25},
                         "xAxis": {"type": "value", "name": "s", "max": 0},
                         "yAxis": [
-                            {"type": "value", "name": "ms", "scale": True},
-                            {"type": "value", "name": "mm", "scale": True},
+                            {"type": "value", "scale": True, "axisLabel": {"formatter": "{value} ms"}},
+                            {"type": "value", "scale": True, "axisLabel": {"formatter": "{value} mm"}},
                         ],
                         "series": [
                             {"name": "latency (ms)", "type": "line", "showSymbol": False, "data": []},

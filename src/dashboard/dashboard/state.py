@@ -13,7 +13,7 @@ from .event_log import EventLog
 from .path_buffer import PathBuffer
 from .readings import LatencyWindow
 from .series import Telemetry
-from .status_style import status_view
+from .status_style import log_text
 
 __all__ = ["DashboardState"]
 
@@ -110,14 +110,16 @@ class DashboardState:
             self._telemetry.add_latency(self._clock(), seconds)
 
     def set_status(self, code: int) -> None:
-        """The teleop status: its value, a chart sample, and a log line when it changes."""
+        """The teleop status: its value, a chart sample, and a log line when it changes
+        (status_style.log_text: the streaming states count as one)."""
         code = int(code)
         with self._lock:
             now = self._clock()
             self._values["status"], self._stamps["status"] = code, now
             self._telemetry.add_status(now, code)
-            if self._events.changed("status", code):
-                self._events.add("status", status_view(code)[0])
+            text = log_text(code)
+            if self._events.changed("status", text):
+                self._events.add("status", text)
 
     def set_watched(self, key: str, value, kind: str, text: str) -> None:
         """Record ``value`` under ``key`` and log ``text`` when the value changed."""

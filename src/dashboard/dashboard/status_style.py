@@ -46,3 +46,12 @@ def status_view(code: int | None) -> tuple[str, str]:
 def is_engaged(code: int | None) -> bool:
     """True when the status code means the clutch is closed."""
     return code in ENGAGED_STATUSES  # IntEnum members hash and compare as their ints
+
+
+def log_text(code: int | None) -> str:
+    """The status as the event log names it. Streaming states (green and amber) are one
+    entry, "engaged": a moving hand flips between ENGAGED and JOINT_SPEED_LIMITED many
+    times a second, which belongs in the status chart, not in a log a person reads; a halt,
+    a refusal or the clutch opening is logged by name."""
+    name, colour = status_view(code)
+    return "engaged (streaming)" if colour in ("green", "amber") else name

@@ -16,7 +16,8 @@ Its modules, by role:
   ``calibration_views`` (choosing calibration views from a stream);
 - vision: ``detector`` (the detectors' base and the classical OpenCV detector), ``onnx_detector`` (a YOLOv8 ONNX
   model through onnxruntime), ``geometry`` (pixel to belt plane), ``vision`` (detections
-  to belt-plane poses), ``vision_pipeline`` (one image in, the parts on the belt out);
+  to belt-plane poses), ``vision_pipeline`` (one image in, the parts on the belt out),
+  ``annotated_image`` (the image with its detections drawn, for the operator's dashboard);
 - picking: ``tracking`` (a Kalman filter per part), ``intercept`` (where and when to meet
   a part on the moving belt), ``picker`` (the kitting cycle), ``slot_program`` (tray slot
   poses from a program taught by gesture), ``campaign`` (trials and their statistics).

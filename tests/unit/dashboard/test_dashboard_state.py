@@ -131,16 +131,22 @@ def test_every_status_has_a_name_and_colour():
 def test_status_changes_are_logged_and_charted_repeats_are_not_logged():
     clock = FakeClock()
     state = DashboardState(clock=clock, wall_clock=lambda: 0.0, series_interval_s=0.0)
-    state.set_status(1)
-    clock.now += 0.1
-    state.set_status(1)
-    clock.now += 0.1
-    state.set_status(int(TeleopStatus.ESTOP))
+    codes = [
+        TeleopStatus.DISENGAGED,
+        TeleopStatus.DISENGAGED,
+        TeleopStatus.ENGAGED,
+        TeleopStatus.JOINT_SPEED_LIMITED,  # still streaming: no new line
+        TeleopStatus.ENGAGED,
+        TeleopStatus.ESTOP,
+    ]
+    for code in codes:
+        clock.now += 0.1
+        state.set_status(int(code))
     snap = state.snapshot()
     assert snap["values"]["status"] == int(TeleopStatus.ESTOP)
     texts = [line.split(None, 2)[2] for line in snap["events"]]
-    assert texts == ["ESTOP", TeleopStatus(1).name]  # newest first, one line per change
-    assert [v for _, v in snap["series"]["status"]] == [1.0, 1.0, float(TeleopStatus.ESTOP)]
+    assert texts == ["ESTOP", "engaged (streaming)", "DISENGAGED"]  # newest first, one line per change
+    assert [v for _, v in snap["series"]["status"]] == [float(c) for c in codes]  # the chart has every one
 
 
 def test_watched_values_log_only_their_changes():
