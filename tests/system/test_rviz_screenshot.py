@@ -256,14 +256,15 @@ class Session:
     def screen(self):
         return read_xwd(os.path.join(self.fb_dir, "Xvfb_screen0"))
 
-    def wait_for_robot(self, timeout=TIMEOUT_S):
+    def wait_for_robot(self, timeout=TIMEOUT_S, ur_colours=True):
         """The screen once the arm is drawn and two grabs 0.5 s apart agree (rviz has
-        finished loading), or the last grab at the timeout; and the pixel counts."""
+        finished loading), or the last grab at the timeout; and the pixel counts. Without
+        ``ur_colours`` (another maker's arm) any steady, non-blank screen counts as drawn."""
         deadline, last = time.monotonic() + timeout, None
         while True:
             rgb = self.screen()
             counts = robot_pixels(rgb)
-            drawn = counts[0] > MIN_GREY and counts[1] > MIN_BLUE
+            drawn = counts[0] > MIN_GREY and counts[1] > MIN_BLUE if ur_colours else not_blank(rgb)
             if drawn and last is not None and np.array_equal(rgb, last):
                 return rgb, counts
             for name, proc in self.procs:
@@ -321,7 +322,7 @@ if __name__ == "__main__":
         publish(sys.argv[2])
     elif sys.argv[1:2] == ["--shot"]:
         with tempfile.TemporaryDirectory() as logs, Session(sys.argv[2], logs) as shot:
-            picture, seen = shot.wait_for_robot()
+            picture, seen = shot.wait_for_robot(ur_colours=sys.argv[2].startswith("ur"))
         write_png_atomic(picture, sys.argv[3])
         print(f"wrote {sys.argv[3]} (grey, blue pixels in the middle: {seen})")
     else:
