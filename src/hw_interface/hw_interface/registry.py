@@ -38,7 +38,19 @@ def _load(target: str) -> Callable:
 
 
 def driver_factory(name: str) -> Callable:
-    """The factory of driver ``name``; raises HwInterfaceError naming the known drivers."""
+    """The factory of driver ``name``: a registered name, or ``module:attribute`` of any
+    module on the Python path (a driver of one's own, without packaging it); raises
+    HwInterfaceError naming the known drivers."""
+    if ":" in name:
+        module_name, _, attribute = name.partition(":")
+        try:
+            return getattr(import_module(module_name), attribute)
+        except ImportError as exc:
+            raise HwInterfaceError(
+                f"driver {name!r}: cannot import {module_name!r} ({exc}); is it on PYTHONPATH?"
+            ) from None
+        except AttributeError:
+            raise HwInterfaceError(f"driver {name!r}: module {module_name!r} has no {attribute!r}") from None
     if name in _registered:
         return _registered[name]
     if name in _BUILTIN:
@@ -46,7 +58,9 @@ def driver_factory(name: str) -> Callable:
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         if ep.name == name:
             return ep.load()
-    raise HwInterfaceError(f"no robot driver named {name!r}; available: {available_drivers()}")
+    raise HwInterfaceError(
+        f"no robot driver named {name!r}; available: {available_drivers()}, or module:Class of your own"
+    )
 
 
 def driver_parameters(name: str):

@@ -6,11 +6,10 @@ import threading
 import time
 
 import numpy as np
-import pybullet
-from pybullet_utils import bullet_client
 
 from motion_common.kinematics import RobotKinematics
 from motion_common.params import Param, ParamSchema
+from motion_common.quiet_pybullet import bullet_client, pybullet
 
 from .errors import HwInterfaceError
 from .protocol import Result
@@ -226,7 +225,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             return
         if url and not url.startswith("sim"):
             raise HwInterfaceError(f"the pybullet driver connects to 'sim://', not {url!r}", Result.LOGIN_FAILED)
-        self._client = bullet_client.BulletClient(connection_mode=pybullet.GUI if self.gui else pybullet.DIRECT)
+        self._client = bullet_client(pybullet.GUI if self.gui else pybullet.DIRECT)
         self._client.setGravity(0, 0, -9.81)
         self._client.setTimeStep(self.time_step)
         self._body = self._client.loadURDF(self.urdf_path, useFixedBase=True, flags=pybullet.URDF_USE_INERTIA_FROM_FILE)

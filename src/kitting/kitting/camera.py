@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-import pybullet as p
 
 from motion_common.camera_model import PinholeCamera
+from motion_common.quiet_pybullet import pybullet as p
 
 __all__ = ["PinholeCamera", "Lighting", "render", "view_matrix", "projection_matrix", "depth_from_buffer"]
 

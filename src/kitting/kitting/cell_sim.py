@@ -20,7 +20,9 @@ from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
+
+from motion_common.quiet_pybullet import connect
+from motion_common.quiet_pybullet import pybullet as p
 
 from .cell import Cell
 from .parts import PART_CLASSES
@@ -77,7 +79,7 @@ class CellSimulation:
     def __init__(self, cell: Cell, time_step: float = 1.0 / 240.0, start_time: float = 0.0):
         self.cell = cell
         self.time_step = float(time_step)
-        self.client = p.connect(p.DIRECT)
+        self.client = connect(p.DIRECT)
         p.setGravity(0, 0, -9.81, physicsClientId=self.client)
         p.setTimeStep(self.time_step, physicsClientId=self.client)
         self.scene = SimScene(self.client, cell)

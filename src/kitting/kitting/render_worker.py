@@ -18,15 +18,15 @@ import numpy as np
 
 
 def _serve(connection, cell_path, width, height, supersample):
-    import pybullet as p
-
     from motion_common.camera_model import PinholeCamera
+    from motion_common.quiet_pybullet import connect
+    from motion_common.quiet_pybullet import pybullet as p
 
     from .camera import render
     from .cell import load_cell
     from .sim_scene import SimScene
 
-    client = p.connect(p.DIRECT)
+    client = connect(p.DIRECT)
     cell = load_cell(cell_path) if cell_path else load_cell()
     scene = SimScene(client, cell)
     camera = PinholeCamera.from_spec(cell.camera)

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-import pybullet as p
 
+from motion_common.quiet_pybullet import pybullet as p
 from motion_common.rotations import matrix_to_quaternion
 
 from .cell import Cell

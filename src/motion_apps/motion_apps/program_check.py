@@ -26,13 +26,12 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import pybullet
-from pybullet_utils import bullet_client
 
 from hw_interface.sim_driver import entry_is_fixed, load_scene
 from motion_common.errors import ParameterError, RobotModelError
 from motion_common.kinematics import RobotKinematics, pose_to_se3, slerp
 from motion_common.params import Param, ParamSchema, read_yaml_file
+from motion_common.quiet_pybullet import bullet_client, pybullet
 
 CHECK_SCHEMA = ParamSchema(
     [
@@ -140,7 +139,7 @@ class ProgramChecker:
     def _world(self, kinematics: RobotKinematics):
         if self._client is not None:
             return
-        client = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
+        client = bullet_client(pybullet.DIRECT)
         self._client = client
         self._robot = client.loadURDF(self.urdf_path, useFixedBase=True)
         by_name, self._link_names = {}, {-1: "base"}

@@ -76,6 +76,14 @@ SESSION_MONITOR = NodeInterface(
                 high=10_000_000,
             ),
             Param("settle", 1.5, "s", "wait after the end for the arm to settle before reporting", low=0.0, high=60.0),
+            Param(
+                "max_refused_fraction",
+                0.1,
+                "",
+                "the session failed (exit code 3) when more of its commands than this were refused",
+                low=0.0,
+                high=1.0,
+            ),
         ]
     ),
     subscribes=(

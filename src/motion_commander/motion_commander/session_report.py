@@ -198,6 +198,24 @@ def _stage_figures(stages):
     }
 
 
+def session_failure(summary: dict, max_refused_fraction: float) -> str:
+    """Why a finished session did not do its job, or "" when it did: no hand frame, no
+    command reaching the robot, or more than ``max_refused_fraction`` of the commands
+    refused (a start pose that does not fit the robot, a workspace too small...)."""
+    if summary["frames_in"] == 0:
+        return "no hand frame arrived from the device"
+    sent, refused = summary["commands_sent"], summary["commands_refused"]
+    if sent == 0:
+        return "no command was sent to the robot: the clutch never engaged"
+    if refused > max_refused_fraction * sent:
+        return (
+            f"{refused} of {sent} commands were refused ({refused / sent:.0%}, more than {max_refused_fraction:.0%}); "
+            "the log above says why (e.g. JOINT_LIMIT_MARGIN, IK_FAILED): check the robot's start pose "
+            "(robot_config:=) and workspace"
+        )
+    return ""
+
+
 def format_summary(summary: dict, plot_path: str = "") -> str:
     """Human-readable summary block for the end of a run."""
 

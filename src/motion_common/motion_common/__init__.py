@@ -23,6 +23,11 @@ layering. Its modules, by role:
 - per-frame and file helpers: ``float_list`` (small vectors as plain floats on the
   latency path), ``startup_heap`` (keeps a node's start-up heap out of the garbage
   collector's scans), ``atomic_file`` (a saved file is either the old one or the new one);
+- sessions: ``launch_args`` (the arguments a launch file declares, and ``name:=value``
+  command lines checked against them with "did you mean"), ``tools_check`` (the install
+  command of a program a launch argument needs), ``ros_log_link`` (a race-free ``latest``
+  link in the ROS log folder; installed by ``ros_interface``), ``quiet_pybullet`` (pybullet
+  imported and connected without its console chatter);
 - ``errors``: ``RobotModelError``, ``ParameterError``.
 
 The names in ``__all__`` are imported from their module on first use, so ``import
@@ -71,6 +76,10 @@ _PUBLIC = {
     "LAUNCH_KEYS": "ros_params",
     "freeze_startup_heap": "startup_heap",
     "write_atomic": "atomic_file",
+    "LaunchArg": "launch_args",
+    "declared_args": "launch_args",
+    "parse_assignments": "launch_args",
+    "unknown_args": "launch_args",
     "RobotModelError": "errors",
     "ParameterError": "errors",
 }

@@ -9,11 +9,16 @@ namespace and remaps place them.
 
 from __future__ import annotations
 
+import warnings
+
 import roslib.message
 import rospy
 
 from .interface import NodeInterface
+from .ros_log_link import install as _install_log_link
 from .ros_params import load_private_params
+
+_install_log_link()
 
 __all__ = ["load_params", "publisher", "subscriber", "service", "service_proxy", "message_class"]
 
@@ -41,7 +46,16 @@ def load_params(node: NodeInterface) -> dict:
 def publisher(node: NodeInterface, name: str, queue_size=10, **kwargs) -> rospy.Publisher:
     """A publisher of the declared topic ``name`` (type and latch from the declaration)."""
     topic = node.published(name)
-    return rospy.Publisher(topic.name, message_class(topic.type), queue_size=queue_size, latch=topic.latched, **kwargs)
+    if queue_size is not None:
+        return rospy.Publisher(
+            topic.name, message_class(topic.type), queue_size=queue_size, latch=topic.latched, **kwargs
+        )
+    # queue_size=None is rospy's synchronous publishing, chosen on purpose on the hot path
+    # (the caller's thread writes to the subscribers itself); rospy warns about it as if
+    # the argument had been forgotten, on every run.
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*queue_size.*", category=SyntaxWarning)
+        return rospy.Publisher(topic.name, message_class(topic.type), queue_size=None, latch=topic.latched, **kwargs)
 
 
 def subscriber(node: NodeInterface, name: str, callback, queue_size=10, **kwargs) -> rospy.Subscriber:

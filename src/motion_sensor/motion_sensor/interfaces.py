@@ -9,6 +9,7 @@ device's libraries. No ROS import.
 
 from motion_common.interface import NodeInterface, Topic
 from motion_common.params import Param, ParamSchema
+from motion_sensor.devices.device import HandDevice
 from motion_sensor.devices.device_interface import device_interface
 from motion_sensor.gestures.gesture_recognizer import RECOGNIZER_PARAMS
 from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS
@@ -91,6 +92,13 @@ REGISTRATION_TF = NodeInterface(
 )
 
 
+class _AnyDevice(HandDevice):
+    """What the generic device_node declares: any device, which may end (a recording)."""
+
+    name = "device"
+    finite = True
+
+
 def device_nodes():
     """The declarations of the device nodes (imports every device class)."""
     from dataclasses import replace
@@ -111,16 +119,32 @@ def device_nodes():
         kinect, publishes=tuple(replace(t, optional=True) if t.name == "~finished" else t for t in kinect.publishes)
     )
     webcam = device_interface(WebcamHandDevice, "webcam_hand_driver")
+    spacemouse = device_interface(SpaceMouseDevice, "spacemouse_driver")
+    spacemouse = replace(
+        spacemouse,
+        publishes=tuple(replace(t, optional=True) if t.name == "~finished" else t for t in spacemouse.publishes),
+    )
+    generic = device_interface(
+        _AnyDevice,
+        "device_node",
+        "Any HandDevice class of one's own, given as `module:Class` (`device:=module:Class`; "
+        "examples/circle_device.py): the shared device wrapper's parameters and topics, plus the class's own "
+        "parameters.",
+    )
+    generic = replace(
+        generic, publishes=tuple(replace(t, optional=True) if t.name == "~finished" else t for t in generic.publishes)
+    )
     webcam = replace(
         webcam, publishes=tuple(replace(t, optional=True) if t.name == "~finished" else t for t in webcam.publishes)
     )
     return [
         device_interface(LeapDevice, "leap_driver"),
-        device_interface(SpaceMouseDevice, "spacemouse_driver"),
+        spacemouse,
         webcam,
         device_interface(DepthTopicDevice, "depth_hand_driver"),
         kinect,
         device_interface(ReplayDevice, "hand_replay"),
+        generic,
     ]
 
 

@@ -256,6 +256,7 @@ class DeviceRunner:
         try:
             self._stream()
         except EndOfStream:
+            self.step(None)  # what the device emitted as it ended (e.g. the clutch released)
             self.finished = True
         finally:
             self.device.connected = False

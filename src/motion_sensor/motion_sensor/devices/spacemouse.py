@@ -29,7 +29,7 @@ from scipy.spatial.transform import Rotation
 from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema
 from motion_sensor.devices.device import Backoff, HandDevice, reconnect_loop
-from motion_sensor.errors import DeviceUnavailable, MotionSensorError
+from motion_sensor.errors import DeviceUnavailable, EndOfStream, MotionSensorError
 from motion_sensor.hand_sample import HandSample
 
 # (vendor id, product id) -> model, as listed by the spacenavd project; any other device is
@@ -304,7 +304,7 @@ class SpaceMouseReader:
             wanted = (
                 f"{self.vendor_id:04x}:{self.product_id:04x}" if self.vendor_id is not None else "any known SpaceMouse"
             )
-            raise OSError(f"no HID device {wanted} (is it plugged in, and readable: see the README's udev rule?)")
+            raise OSError(f"no HID device {wanted}: is it plugged in, and readable? {UDEV_HINT}")
         return found
 
     def open(self) -> None:
@@ -393,6 +393,18 @@ def rate_config(config: dict) -> RateConfig:
     )
 
 
+#: What a user without read access to the device needs (the first vendor id is 3Dconnexion's,
+#: the second Logitech's, for older models).
+UDEV_HINT = (
+    'Non-root access needs a udev rule: put KERNEL=="hidraw*", ATTRS{idVendor}=="256f", MODE="0666" '
+    "(and the same line with 046d) in /etc/udev/rules.d/99-spacemouse.rules, then replug the device"
+)
+
+#: After a report log's last report, the virtual hand is published this long (its
+#: deflection then counts as released, so it comes to rest) before the stream ends.
+LOG_TAIL_S = 0.5
+
+
 class SpaceMouseDevice(HandDevice):
     """A SpaceMouse as a HandDevice: polled at ``rate_hz``, each poll drains the HID reports
     (or, with ``report_log``, the log's reports due by now, at their recorded timing from
@@ -400,11 +412,17 @@ class SpaceMouseDevice(HandDevice):
     returns its pose stamped now. The ``engage_button``'s state goes to
     /motion_commander/engage at the first report and at every change. Malformed reports are
     dropped and counted (``rejected``), reports of other kinds counted as ``ignored``.
-    Nothing is published while no device is open (nor before a log's first report)."""
+    Nothing is published while no device is open (nor before a log's first report).
+
+    A report log ends the stream (``EndOfStream``, so the session ends as with any
+    recording) ``hold_timeout_s`` + LOG_TAIL_S after its last report, with the clutch
+    released. With no device found for ``device_wait_s`` from the start, the node stops
+    with the udev hint rather than retrying forever (0: wait for ever)."""
 
     name = "spacemouse"
     default_frame_id = "spacemouse"
     bool_outputs = {"engage": "motion_commander/engage"}
+    finite = True  # a report log ends (EndOfStream); a device never does
     params = RATE_PARAMS.merged(
         ParamSchema(
             [
@@ -418,6 +436,14 @@ class SpaceMouseDevice(HandDevice):
                 Param("hid_backend", "hidraw", choices=tuple(sorted(HID_BACKENDS)), doc="hidapi backend"),
                 Param("report_log", "", doc="replay this report log (lines 'SECONDS HEX') instead of a device"),
                 Param("record_reports", "", doc="write every report to this log"),
+                Param(
+                    "device_wait_s",
+                    10.0,
+                    "s",
+                    "give up (and stop the node) when no device appears for this long from the start; 0: wait for ever",
+                    low=0.0,
+                    high=86400.0,
+                ),
             ]
         )
     )
@@ -434,6 +460,9 @@ class SpaceMouseDevice(HandDevice):
         self.last_report = None
         self._record = None
         self._rows, self._next_row, self._log_start = None, 0, None
+        self._log_done_at = None
+        self._first_open_try = None
+        self._ever_opened = False
         self.reader = None
         if not self.report_log:
             vendor, product = self.config["vendor_id"], self.config["product_id"]
@@ -456,7 +485,21 @@ class SpaceMouseDevice(HandDevice):
         self.decoder = SpaceMouseDecoder()  # a re-plugged device starts at rest
         self.last_report = None
         if self.reader is not None:
-            self.reader.open()
+            now = self.clock()
+            if self._first_open_try is None:
+                self._first_open_try = now
+            try:
+                self.reader.open()
+            except OSError as exc:
+                waited = now - self._first_open_try
+                wait = self.config["device_wait_s"]
+                if not self._ever_opened and wait > 0 and waited >= wait:
+                    raise MotionSensorError(
+                        f"no SpaceMouse found in {waited:.0f} s ({exc}). device_wait_s:=0 waits for ever; "
+                        "spacemouse_log:=FILE replays a report log instead"
+                    ) from None
+                raise
+            self._ever_opened = True
             self.info(f"{self.reader.device_name} open")
             return
         if self._rows is None:
@@ -475,6 +518,7 @@ class SpaceMouseDevice(HandDevice):
                 self._next_row += 1
                 if self._next_row == len(self._rows):
                     self.info("report log done")
+                    self._log_done_at = self._log_start + seconds
                 yield list(report), self._log_start + seconds
             return
         for _ in range(64):  # at most a poll's worth; the rest waits for the next poll
@@ -510,6 +554,11 @@ class SpaceMouseDevice(HandDevice):
     def read(self, now):
         for report, received in self._due_reports(now):
             self.on_report(report, received)
+        if self._log_done_at is not None and now - self._log_done_at > self.config["hold_timeout_s"] + LOG_TAIL_S:
+            if self.engaged:
+                self.engaged = False
+                self.emit("engage", False)
+            raise EndOfStream("report log replayed")
         if self.reader is None and self.last_report is None:
             return None  # a log publishes from its first report on, as a device from its opening
         age = float("inf") if self.last_report is None else now - self.last_report
