@@ -38,6 +38,9 @@ class CircleDevice(HandDevice):
     name = "circle"  # hardware_id in /diagnostics
     default_frame_id = "leap"
     rate_hz = 100.0  # the wrapper calls read() at this rate; None: read() blocks for each sample
+    # A source that ends (EndOfStream): the wrapper then publishes ~finished, which ends the
+    # session. A live tracker leaves this False.
+    finite = True
     # A synthetic source has no moment of arrival: stamp each sample as it is published.
     stamp_on_publish = True
     params = ParamSchema(

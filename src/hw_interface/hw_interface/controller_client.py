@@ -22,6 +22,10 @@ class MotionControllerClient:
         self.service = service
         try:
             rospy.wait_for_service(service, timeout=timeout)
+        except rospy.ROSInterruptException:
+            # rospy raises this (a ROSException) when the node is shut down while waiting: the
+            # session is ending, and "did not appear within N s" would blame the wrong thing.
+            raise HwInterfaceError(f"shut down while waiting for service {service}", Result.NOT_CONNECTED) from None
         except rospy.ROSException:
             raise HwInterfaceError(
                 f"service {service} did not appear within {timeout:.0f} s; "

@@ -32,7 +32,9 @@ def native_output_silenced():
             os.dup2(devnull.fileno(), 2)
         yield
     finally:
-        # C's stdio may buffer what pybullet printed: flush it to /dev/null first.
+        # What was printed inside, still in Python's or C's buffers, goes to /dev/null too.
+        sys.stdout.flush()
+        sys.stderr.flush()
         _LIBC.fflush(None)
         for fd, copy in zip((1, 2), saved):
             os.dup2(copy, fd)

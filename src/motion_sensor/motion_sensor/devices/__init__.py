@@ -7,6 +7,7 @@ Its modules:
 - ``device``: the base class, reconnect with backoff, the streaming loop;
 - ``device_interface``: what every device node declares (wrapper parameters and topics);
 - ``device_node``: the ROS node wrapper of every device (a ROS edge);
+- ``device_loader``: a device class of one's own named ``module:Class`` (``device:=module:Class``);
 - ``depth_node``: the ROS edge of the depth-camera devices (image subscribers, the Kinect choice);
 - ``leap_v6``: Leap protocol v6 parsing and recordings;
 - ``leap_client``: the Leap WebSocket client and device;
@@ -30,6 +31,7 @@ from motion_common.lazy_exports import lazy_exports
 # Public name -> the module of this subpackage that defines it.
 _PUBLIC = {
     "HandDevice": "device",
+    "device_class": "device_loader",
     "DeviceRunner": "device",
     "Backoff": "device",
     "reconnect_loop": "device",
