@@ -153,6 +153,12 @@ KITTING_TRIALS = NodeInterface(
             Param("ready_timeout", 120.0, "s", "wait for the cell to be ready", low=0.0, low_open=True),
             Param("output_dir", "output", doc="folder for kitting_summary.json"),
             Param("stay_up", False, doc="keep running after the campaign (the dashboard starts the next)"),
+            Param(
+                "end_session",
+                False,
+                doc="when done, stop the roslaunch that started this node as Ctrl-C does "
+                "(a hand-started session ends without the REQUIRED banner)",
+            ),
         ]
     ),
     publishes=(

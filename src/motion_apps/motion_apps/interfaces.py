@@ -67,6 +67,12 @@ TEACH_DEMO = NodeInterface(
             Param("scene", "", doc="scene YAML the program is checked against (its static bodies)"),
             Param("urdf", "", doc="robot URDF (for the program check)"),
             Param("part", "part", doc="scene body that is picked and placed"),
+            Param(
+                "end_session",
+                False,
+                doc="when done, stop the roslaunch that started this node as Ctrl-C does "
+                "(a hand-started session ends without the REQUIRED banner)",
+            ),
             Param("tolerance_mm", 10.0, "mm", "largest placement error that counts as success", low=0.0, low_open=True),
             Param(
                 "save_timeout_s",

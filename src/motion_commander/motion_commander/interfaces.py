@@ -77,6 +77,12 @@ SESSION_MONITOR = NodeInterface(
             ),
             Param("settle", 1.5, "s", "wait after the end for the arm to settle before reporting", low=0.0, high=60.0),
             Param(
+                "end_session",
+                False,
+                doc="when done, stop the roslaunch that started this node as Ctrl-C does "
+                "(a hand-started session ends without the REQUIRED banner)",
+            ),
+            Param(
                 "max_refused_fraction",
                 0.1,
                 "",

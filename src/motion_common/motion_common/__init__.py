@@ -26,8 +26,10 @@ layering. Its modules, by role:
 - sessions: ``launch_args`` (the arguments a launch file declares, and ``name:=value``
   command lines checked against them with "did you mean"), ``tools_check`` (the install
   command of a program a launch argument needs), ``ros_log_link`` (a race-free ``latest``
-  link in the ROS log folder; installed by ``ros_interface``), ``quiet_pybullet`` (pybullet
-  imported and connected without its console chatter);
+  link in the ROS log folder; installed by ``ros_interface``), ``native_output`` (what native
+  libraries print to the file descriptors, silenced around known-noisy start-up calls),
+  ``quiet_pybullet`` (pybullet imported and connected without its console chatter), ``session_end`` (a finishing node
+  stops the hand-started roslaunch that runs it, without the REQUIRED banner);
 - ``errors``: ``RobotModelError``, ``ParameterError``.
 
 The names in ``__all__`` are imported from their module on first use, so ``import

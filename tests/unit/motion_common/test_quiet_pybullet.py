@@ -22,7 +22,7 @@ def test_import_and_connect_are_silent():
 def test_output_inside_the_block_is_dropped_and_after_it_shown():
     code = (
         "import sys; sys.path.insert(0, {!r})\n"
-        "from motion_common.quiet_pybullet import native_output_silenced\n"
+        "from motion_common.native_output import native_output_silenced\n"
         "with native_output_silenced():\n"
         "    print('hidden'); print('hidden too', file=sys.stderr)\n"
         "print('shown'); print('shown too', file=sys.stderr)\n"

@@ -11,6 +11,7 @@ import os
 
 import numpy as np
 
+from motion_common.native_output import native_output_silenced
 from motion_sensor.devices.hand_landmarks import NUM_LANDMARKS, DetectedHand
 from motion_sensor.errors import MotionSensorError
 
@@ -24,6 +25,19 @@ class HandDetector(abc.ABC):
 
     def close(self) -> None:
         """Release the detector's resources (optional)."""
+
+
+def _protobuf_compatibility() -> None:
+    """mediapipe 0.10.21 calls ``MessageFactory.GetPrototype``, which protobuf 5 removed in
+    favour of ``message_factory.GetMessageClass``; the protobuf pinned here (onnx needs >= 6)
+    has only the new name, and every graph start printed an AttributeError. The old name is
+    given back, delegating to the new one."""
+    from google.protobuf import message_factory
+
+    if not hasattr(message_factory.MessageFactory, "GetPrototype"):
+        message_factory.MessageFactory.GetPrototype = lambda self, descriptor: message_factory.GetMessageClass(
+            descriptor
+        )
 
 
 class MediaPipeHandDetector(HandDetector):
@@ -45,23 +59,34 @@ class MediaPipeHandDetector(HandDetector):
         # Quieten TensorFlow Lite's and glog's start-up chatter on stderr (before the import).
         os.environ.setdefault("GLOG_minloglevel", "2")
         os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "2")
+        _protobuf_compatibility()
         try:
             from mediapipe.python.solutions import hands as mp_hands
         except ImportError as exc:
             raise MotionSensorError(
                 f"mediapipe is not installed ({exc}); run scripts/setup (it installs requirements-nodeps.txt)"
             ) from None
-        self._hands = mp_hands.Hands(
-            static_image_mode=static_image_mode,
-            max_num_hands=max_num_hands,
-            model_complexity=model_complexity,
-            min_detection_confidence=min_detection_confidence,
-            min_tracking_confidence=min_tracking_confidence,
-        )
+        # The graph's start-up (TFLite delegate, absl "before InitializeLog" and feedback-tensor
+        # notices) and its first frame with a hand (a NORM_RECT notice) print warnings that
+        # are no fault, straight to stderr from C++: silenced until the first hand is seen.
+        self._warming_up = True
+        with native_output_silenced():
+            self._hands = mp_hands.Hands(
+                static_image_mode=static_image_mode,
+                max_num_hands=max_num_hands,
+                model_complexity=model_complexity,
+                min_detection_confidence=min_detection_confidence,
+                min_tracking_confidence=min_tracking_confidence,
+            )
 
     def detect(self, rgb: np.ndarray) -> list[DetectedHand]:
         height, width = rgb.shape[:2]
-        result = self._hands.process(np.ascontiguousarray(rgb))
+        if self._warming_up:
+            with native_output_silenced():
+                result = self._hands.process(np.ascontiguousarray(rgb))
+            self._warming_up = not result.multi_hand_landmarks
+        else:
+            result = self._hands.process(np.ascontiguousarray(rgb))
         if not result.multi_hand_landmarks:
             return []
         hands = []
