@@ -9,7 +9,8 @@ Its modules, by role:
   implements: the paper's API plus what real controllers need), ``registry`` (drivers by
   name: the built-ins and any package's ``hw_interface.drivers`` entry point);
 - drivers: ``sim_driver`` (pybullet simulation), ``ur_driver`` (Universal Robots over
-  ur_rtde), with ``trajectory`` (MoveJ/MoveL time parameterisation) and
+  ur_rtde), ``industrial_driver`` (ROS-Industrial controllers over ``simple_message``, the
+  wire format), with ``trajectory`` (MoveJ/MoveL time parameterisation) and
   ``stream_follower`` (streamed joint targets within the velocity limits);
 - the server's core: ``protocol`` (commander.srv's command and result tables as enums),
   ``dispatcher`` (checks every request, then calls the driver), ``server_params`` (the
@@ -18,7 +19,8 @@ Its modules, by role:
   /motion_controller; a ROS edge (rospy and the generated ``motion_commander/commander``
   service);
 - ``errors``: ``HwInterfaceError``;
-- ``testing``: test doubles (the fake UR controller), injected by registry name and
+- ``testing``: test doubles (the fake UR controller, the simulated simple_message
+  controller), injected by registry name and
   never imported by production code.
 
 The names in ``__all__`` are imported from their module on first use, so ``import
@@ -42,6 +44,7 @@ _PUBLIC = {
     "PybulletSimDriver": "sim_driver",
     "load_scene": "sim_driver",
     "URRtdeDriver": "ur_driver",
+    "SimpleMessageDriver": "industrial_driver",
     "JointPath": "trajectory",
     "StreamFollower": "stream_follower",
     "CommandIndex": "protocol",

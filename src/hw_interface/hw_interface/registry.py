@@ -17,6 +17,10 @@ _BUILTIN = {
     "ur_rtde": "hw_interface.ur_driver:URRtdeDriver",
     # The UR driver on a simulated controller (dry runs, tests): injected, not a flag.
     "ur_rtde_fake": "hw_interface.testing.fake_rtde:fake_ur_driver",
+    # ROS-Industrial controllers (Stäubli, ABB, Fanuc, Motoman) over simple_message, and the
+    # same driver on a byte-level simulated controller.
+    "simple_message": "hw_interface.industrial_driver:SimpleMessageDriver",
+    "simple_message_fake": "hw_interface.testing.fake_simple_message:fake_simple_message_driver",
 }
 _registered: dict[str, Callable] = {}
 

@@ -13,7 +13,12 @@ from .registry import driver_parameters
 
 SERVER_PARAMETERS = ParamSchema(
     [
-        Param("driver", "pybullet", doc="registry name of the driver: pybullet, ur_rtde, ur_rtde_fake or a plugin"),
+        Param(
+            "driver",
+            "pybullet",
+            doc="registry name of the driver: pybullet, ur_rtde, ur_rtde_fake, simple_message, simple_message_fake "
+            "or a plugin",
+        ),
         Param("driver_params", {}, doc="the driver's parameters, checked against its PARAMETERS schema"),
         Param("urdf", "", doc="robot URDF path (required)"),
         Param("tool_frame", "tool0", doc="tool link of the URDF"),

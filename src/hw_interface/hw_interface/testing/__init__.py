@@ -2,7 +2,10 @@
 
 ``fake_rtde``: a fake of ur_rtde's control, receive and IO interfaces (``FakeUR``) that
 records every call and simulates the arm in real time, and ``fake_ur_driver``, the UR driver wired
-to it (the registry name ``ur_rtde_fake``). Production code never imports this package:
+to it (the registry name ``ur_rtde_fake``); ``fake_simple_message``: a byte-level simulated
+ROS-Industrial controller serving simple_message on two TCP ports
+(``FakeSimpleMessageController``), and ``fake_simple_message_driver``, the simple_message
+driver wired to it (``simple_message_fake``). Production code never imports this package:
 the fake is selected by that name.
 
 The names in ``__all__`` are imported from their module on first use.
@@ -15,6 +18,8 @@ _PUBLIC = {
     "FakeUR": "fake_rtde",
     "AsyncOperationStatus": "fake_rtde",
     "fake_ur_driver": "fake_rtde",
+    "FakeSimpleMessageController": "fake_simple_message",
+    "fake_simple_message_driver": "fake_simple_message",
 }
 __all__ = list(_PUBLIC)
 
