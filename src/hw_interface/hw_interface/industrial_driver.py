@@ -42,7 +42,7 @@ def parse_controller_url(url: str, default_host: str) -> str:
     """The controller host of a LOGIN url: ``simple_message://HOST``, ``tcp://HOST`` or a
     bare HOST; empty or ``sim://``: ``default_host`` (the robot_ip parameter)."""
     url = (url or "").strip()
-    if not url or url.startswith("sim"):
+    if not url or url.startswith("sim://"):
         return default_host
     for scheme in ("simple_message://", "tcp://"):
         if url.startswith(scheme):
@@ -303,7 +303,7 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
             self._close("login")
             error = self._connect_with_backoff(Result.LOGIN_FAILED)
             if error is not None:
-                raise error
+                raise HwInterfaceError(str(error), Result.LOGIN_FAILED)
             try:
                 self._check_controller()
             except HwInterfaceError:
@@ -398,8 +398,9 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
                 Result.LOGIN_FAILED,
             )
 
-    def _close(self, why):
-        """Close both connections; fail the pending requests; wake a watching move."""
+    def _close(self, why, result=Result.NOT_CONNECTED):
+        """Close both connections; fail the pending requests (with ``result``); wake a
+        watching move."""
         with self._lock:
             self._generation += 1
             socks = (self._motion_sock, self._state_sock)
@@ -409,7 +410,12 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
             pending, self._pending = list(self._pending), collections.deque()
             self._state_event.notify_all()
         for request in pending:
-            request.error = HwInterfaceError(f"connection closed ({why}) before the reply", Result.NOT_CONNECTED)
+            text = (
+                f"the controller sent bad data ({why})"
+                if result == Result.DRIVER_FAULT
+                else f"connection closed ({why})"
+            )
+            request.error = HwInterfaceError(f"{text} before the reply to {request.what}", result)
             request.event.set()
         for sock in socks:
             if sock is not None:
@@ -433,7 +439,7 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
                 self._fault = f"connection lost: {why}"
         if protocol:
             self._send_stop_trajectory()
-        self._close(why)
+        self._close(why, Result.DRIVER_FAULT if protocol else Result.NOT_CONNECTED)
 
     def _ensure_connected(self):
         """Raise unless connected with fresh state; reconnect with backoff after a drop."""

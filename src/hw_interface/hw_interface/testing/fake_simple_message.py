@@ -199,10 +199,11 @@ class FakeSimpleMessageController:
         with self.lock:
             self.error_code = 0
 
-    def drop_connections(self, refuse: bool = False):
-        """Close both client connections (a pulled cable); with ``refuse`` the ports stay
-        closed until accept_connections()."""
-        for server in (self._motion, self._state):
+    def drop_connections(self, refuse: bool = False, ports=("motion", "state")):
+        """Close the client connections of ``ports`` (both: a pulled cable); with ``refuse``
+        the ports stay closed until accept_connections()."""
+        servers = {"motion": self._motion, "state": self._state}
+        for server in (servers[name] for name in ports):
             if refuse:
                 server.close_listener()
             server.drop_client()
