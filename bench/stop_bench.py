@@ -1,11 +1,15 @@
 """STOP reaction of the hardware layer: from a STOP request (another thread) during a ~3 s
 blocking MoveJ to (a) the interrupted move's answer and (b) the arm being still, for the
-pybullet driver and the UR driver on its real-time fake controller (ur_rtde_fake), through
-the CommandDispatcher (what motion_controller_server runs), p50/p99 over N trials.
+pybullet driver, the UR driver on its real-time fake controller (ur_rtde_fake) and the
+simple_message driver on its byte-level simulated controller over local TCP
+(simple_message_fake), through the CommandDispatcher (what motion_controller_server runs),
+p50/p99 over N trials.
 
 "Still": sim, every measured joint speed below 0.01 rad/s and staying so (pybullet's
 position servo rings down); fake, the fake controller reports no joint moving (the end of
-stopJ's deceleration, 2 rad/s^2 by default, from the speed reached when STOP arrived).
+stopJ's deceleration, 2 rad/s^2 by default, from the speed reached when STOP arrived);
+simple_message, the simulated controller's arm at rest after STOP_TRAJECTORY (it brakes at
+20 rad/s^2, and reports its joints every 10 ms).
 
 Run: bench/run stop_bench [--trials 20]; writes bench/results/stop_bench.json.
 """
@@ -47,6 +51,12 @@ def make(name):
 
         def still():
             return np.max(np.abs(driver.get_joint_velocities())) < 0.01
+
+    elif name == "simple_message_fake":
+        driver = create_driver("simple_message_fake", urdf_path=URDF, initial_joints=list(HOME))
+
+        def still():
+            return not driver.fake.is_moving()
 
     else:
         driver = create_driver("ur_rtde_fake", urdf_path=URDF, initial_joints=list(HOME))
@@ -97,7 +107,7 @@ def main():
 
     rng = np.random.default_rng(7)
     results = {}
-    for name in ("pybullet", "ur_rtde_fake"):
+    for name in ("pybullet", "ur_rtde_fake", "simple_message_fake"):
         driver, still = make(name)
         dispatcher = CommandDispatcher(driver)
         move_answer, stop_answer, to_still = [], [], []
@@ -110,6 +120,8 @@ def main():
                 to_still.append(t)
         finally:
             driver.disconnect()
+            if name == "simple_message_fake":
+                driver.fake.close()
         results[name] = {
             "stop_request_to_stop_answer": stats(stop_answer),
             "stop_request_to_interrupted_move_answer": stats(move_answer),
@@ -118,7 +130,8 @@ def main():
     results["machine"] = {"cores": os.cpu_count()}
     results["note"] = (
         "in-process through CommandDispatcher; the fake's time to still is stopJ's deceleration "
-        "(2 rad/s^2) from the speed at the STOP"
+        "(2 rad/s^2) from the speed at the STOP; simple_message_fake's is the simulated controller's braking "
+        "(20 rad/s^2) after STOP_TRAJECTORY over local TCP"
     )
     write_results("stop_bench", results)
 
