@@ -122,3 +122,25 @@ def test_a_node_that_dies_ends_the_session_with_its_cause_last(tmp_path):
     assert "session FAILED: node motion_controller_server" in tail and "controller unreachable at 10.0.0.9" in tail
     assert not (tmp_path / "out" / "latest").exists()
     assert not list((tmp_path / "out" / "runs").glob("*/session_summary.json"))
+
+
+def test_a_hand_started_roslaunch_ends_cleanly(tmp_path):
+    environment = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{free_port()}", ROS_HOME=str(tmp_path / "ros"))
+    process = subprocess.Popen(
+        ["roslaunch", "motion_bringup", "teleop_sim.launch", f"output_dir:={tmp_path / 'out'}"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=environment,
+        cwd=ROOT,
+    )
+    try:
+        out, _ = process.communicate(timeout=TIMEOUT)
+    except subprocess.TimeoutExpired:
+        process.send_signal(signal.SIGINT)
+        out, _ = process.communicate(timeout=60)
+        pytest.fail(f"the hand-started session did not end by itself within {TIMEOUT} s:\n{out}")
+    assert process.returncode == 0, out
+    assert "REQUIRED process" not in out and "has died" not in out, out
+    assert "=== teleop session summary ===" in out
+    assert (tmp_path / "out" / "session_summary.json").exists()

@@ -126,6 +126,9 @@ class DashboardPage:
         card = _tid(ui.card(), f"panel-{name}").classes("dash-card q-pa-sm")
         if style:
             card.style(style)
+        # Shown or hidden from the start, not from the first refresh: a page must never flash
+        # (or, on a slow machine, show for a while) another application's panels.
+        card.set_visibility(name in panels_for(self.state.get("application") or "teleop"))
         self.panels[name] = card
         return card
 
