@@ -35,15 +35,15 @@ def free_port():
         return s.getsockname()[1]
 
 
-def teleop(tmp_path, *args, env=None):
-    """Run scripts/teleop_sim with ``args``; (exit code, stdout, stderr, seconds)."""
+def session(tmp_path, argv, env=None, merged=False):
+    """Run a session command with its own master; (exit code, stdout, stderr, seconds)."""
     environment = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{free_port()}", ROS_HOME=str(tmp_path / "ros"))
     environment.update(env or {})
     start = time.monotonic()
     process = subprocess.Popen(
-        [TELEOP, f"output_dir:={tmp_path / 'out'}", *args],
+        argv,
         stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
+        stderr=subprocess.STDOUT if merged else subprocess.PIPE,
         text=True,
         env=environment,
         cwd=ROOT,
@@ -54,8 +54,13 @@ def teleop(tmp_path, *args, env=None):
         # Ctrl-C, as a user would: roslaunch then stops every node (a kill would orphan them).
         process.send_signal(signal.SIGINT)
         out, err = process.communicate(timeout=60)
-        pytest.fail(f"the session did not end within {TIMEOUT} s:\n{out}\n{err}")
-    return process.returncode, out, err, time.monotonic() - start
+        pytest.fail(f"the session did not end by itself within {TIMEOUT} s:\n{out}\n{err}")
+    return process.returncode, out, err or "", time.monotonic() - start
+
+
+def teleop(tmp_path, *args, env=None):
+    """scripts/teleop_sim with ``args``, its runs under tmp_path/out."""
+    return session(tmp_path, [TELEOP, f"output_dir:={tmp_path / 'out'}", *args], env)
 
 
 def latest_summary(tmp_path):
@@ -125,22 +130,9 @@ def test_a_node_that_dies_ends_the_session_with_its_cause_last(tmp_path):
 
 
 def test_a_hand_started_roslaunch_ends_cleanly(tmp_path):
-    environment = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{free_port()}", ROS_HOME=str(tmp_path / "ros"))
-    process = subprocess.Popen(
-        ["roslaunch", "motion_bringup", "teleop_sim.launch", f"output_dir:={tmp_path / 'out'}"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        env=environment,
-        cwd=ROOT,
-    )
-    try:
-        out, _ = process.communicate(timeout=TIMEOUT)
-    except subprocess.TimeoutExpired:
-        process.send_signal(signal.SIGINT)
-        out, _ = process.communicate(timeout=60)
-        pytest.fail(f"the hand-started session did not end by itself within {TIMEOUT} s:\n{out}")
-    assert process.returncode == 0, out
+    argv = ["roslaunch", "motion_bringup", "teleop_sim.launch", f"output_dir:={tmp_path / 'out'}"]
+    code, out, _, _ = session(tmp_path, argv, merged=True)
+    assert code == 0, out
     assert "REQUIRED process" not in out and "has died" not in out, out
     assert "=== teleop session summary ===" in out
     assert (tmp_path / "out" / "session_summary.json").exists()
