@@ -1,9 +1,11 @@
 """Hardware-layer benchmarks: simulator real-time factor, commander.srv round trip with the
 persistent client (baseline: a fresh connection per call), and streaming SetJoints at
-500 Hz through motion_controller_server to the pybullet driver.
+500 Hz through motion_controller_server to a driver: the pybullet simulation (default), or
+the simple_message driver on its byte-level simulated controller (TX90), or the UR driver
+on its fake controller.
 
-Run: bench/run hw_bench [--stream-seconds 10] [--calls 2000]
-Writes bench/results/hw_bench.json.
+Run: bench/run hw_bench [--driver pybullet|simple_message_fake|ur_rtde_fake] [--stream-seconds 10] [--calls 2000]
+Writes bench/results/hw_bench.json (pybullet) or hw_bench_<driver>.json.
 """
 
 import argparse
@@ -17,8 +19,16 @@ import numpy as np
 from bench_common import write_results
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-HOME = np.array([0.0, -1.5707963, 1.5707963, -1.5707963, -1.5707963, 0.0])
 PORT = 11477  # a master of its own, so a running session is never disturbed
+LAUNCH = os.path.join(ROOT, "src", "motion_bringup", "launch")
+UR_HOME = [0.0, -1.5707963, 1.5707963, -1.5707963, -1.5707963, 0.0]
+HOME = np.array(UR_HOME)
+# Driver -> (launch file and arguments, start pose of its robot: rad).
+DRIVERS = {
+    "pybullet": (["hw_sim.launch"], UR_HOME),
+    "simple_message_fake": (["hw_industrial.launch", "fake_controller:=true"], [0.0, 0.4, 1.6, 0.0, 1.14, 0.0]),
+    "ur_rtde_fake": (["hw_ur.launch", "fake_controller:=true"], UR_HOME),
+}
 
 
 def percentiles(samples_s):
@@ -56,12 +66,14 @@ def sim_real_time_factor(seconds):
     return figures
 
 
-def service_benchmarks(calls, stream_seconds):
-    """Round trip and 500 Hz streaming through a hw_sim.launch started here."""
+def service_benchmarks(calls, stream_seconds, driver="pybullet"):
+    """Round trip and 500 Hz streaming through the driver's launch file, started here."""
+    (launch_file, *launch_args), home = DRIVERS[driver]
+    home = np.array(home)
     env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}")
     os.environ["ROS_MASTER_URI"] = env["ROS_MASTER_URI"]
     launch = subprocess.Popen(
-        ["roslaunch", "-p", str(PORT), os.path.join(ROOT, "src", "motion_bringup", "launch", "hw_sim.launch")],
+        ["roslaunch", "-p", str(PORT), os.path.join(LAUNCH, launch_file), *launch_args],
         env=env,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
@@ -74,7 +86,7 @@ def service_benchmarks(calls, stream_seconds):
 
         rospy.init_node("hw_bench", disable_signals=True)
         client = MotionControllerClient(timeout=60.0)
-        client.move_j(HOME)
+        client.move_j(home)
         for _ in range(50):  # warm up
             client.get_joints()
         persistent = []
@@ -97,7 +109,7 @@ def service_benchmarks(calls, stream_seconds):
             due = start + k * period
             while time.perf_counter() < due:
                 pass
-            q = HOME + 0.2 * np.sin(2 * np.pi * 0.5 * k * period)
+            q = home + 0.2 * np.sin(2 * np.pi * 0.5 * k * period)
             t = time.perf_counter()
             client.set_joints(q)
             done = time.perf_counter()
@@ -129,12 +141,15 @@ def main():
     parser.add_argument("--calls", type=int, default=2000, help="round trips to time (default 2000)")
     parser.add_argument("--stream-seconds", type=float, default=10.0, help="500 Hz streaming duration (s)")
     parser.add_argument("--sim-seconds", type=float, default=5.0, help="real-time factor run length (s)")
+    parser.add_argument("--driver", choices=sorted(DRIVERS), default="pybullet", help="the driver to measure")
     args = parser.parse_args()
-    print("simulator real-time factor...", flush=True)
-    results = {"simulator": sim_real_time_factor(args.sim_seconds)}
-    results.update(service_benchmarks(args.calls, args.stream_seconds))
+    results = {"driver": args.driver}
+    if args.driver == "pybullet":
+        print("simulator real-time factor...", flush=True)
+        results["simulator"] = sim_real_time_factor(args.sim_seconds)
+    results.update(service_benchmarks(args.calls, args.stream_seconds, args.driver))
     results["machine"] = {"cores": os.cpu_count()}
-    write_results("hw_bench", results)
+    write_results("hw_bench" if args.driver == "pybullet" else f"hw_bench_{args.driver}", results)
 
 
 if __name__ == "__main__":
