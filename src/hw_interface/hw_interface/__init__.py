@@ -10,8 +10,11 @@ Its modules, by role:
   name: the built-ins and any package's ``hw_interface.drivers`` entry point);
 - drivers: ``sim_driver`` (pybullet simulation), ``ur_driver`` (Universal Robots over
   ur_rtde), ``industrial_driver`` (ROS-Industrial controllers over ``simple_message``, the
-  wire format), with ``trajectory`` (MoveJ/MoveL time parameterisation) and
-  ``stream_follower`` (streamed joint targets within the velocity limits);
+  wire format, and ``tcp``, how its sockets close), with ``trajectory`` (MoveJ/MoveL time
+  parameterisation) and ``stream_follower`` (streamed joint targets within the velocity
+  limits); the two drivers of real controllers share ``real_controller`` (arming,
+  reconnect backoff, moves watched on the measured joints) and ``driver_params`` (the
+  parameters they declare alike);
 - the server's core: ``protocol`` (commander.srv's command and result tables as enums),
   ``dispatcher`` (checks every request, then calls the driver), ``server_params`` (the
   server's parameters and its drivers' parameter check);

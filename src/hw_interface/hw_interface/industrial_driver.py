@@ -30,10 +30,13 @@ from motion_common.kinematics import RobotKinematics
 from motion_common.params import Param, ParamSchema
 
 from . import simple_message as sm
+from .driver_params import ARMING_PARAMS, GOAL_TOLERANCE_PARAMS, RECONNECT_PARAMS, positive_param
 from .errors import HwInterfaceError
 from .protocol import Result
+from .real_controller import RealControllerMixin
 from .robot_hw import DriverStatus, RobotDriver, UrdfModelMixin
 from .stream_follower import STREAM_ACCELERATION_PARAM, StreamFollower
+from .tcp import close_socket
 
 __all__ = ["SimpleMessageDriver", "parse_controller_url"]
 
@@ -62,7 +65,7 @@ class _Pending:
         self.error = None  # an HwInterfaceError when the connection failed first
 
 
-class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
+class SimpleMessageDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
     """An industrial arm behind a simple_message server.
 
     Parameters (``PARAMETERS``): the address (``robot_ip``, ``motion_port``,
@@ -76,8 +79,7 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
 
     PARAMETERS = ParamSchema(
         [
-            Param("robot_ip", "", doc="controller address; empty: never connect"),
-            Param("armed", False, doc="must be true to connect and move the robot"),
+            *ARMING_PARAMS,
             Param(
                 "motion_port", 11000, "", "TCP port of the controller's motion (trajectory) server", low=1, high=65535
             ),
@@ -104,17 +106,11 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
                 choices=("joint_traj_pt", "joint_traj_pt_full"),
             ),
             Param("robot_id", 0, "", "motion group of JOINT_TRAJ_PT_FULL points", low=0, high=15),
-            Param(
-                "move_velocity",
-                0.25,
-                "1",
-                "MOVE_J speed as a fraction of the URDF joint speed limits",
-                low=0.0,
-                high=1.0,
-                low_open=True,
+            positive_param(
+                "move_velocity", 0.25, "1", "MOVE_J speed as a fraction of the URDF joint speed limits", 1.0
             ),
-            Param("linear_speed", 0.25, "m/s", "MOVE_L tool speed", low=0.0, high=3.0, low_open=True),
-            Param("angular_speed", 1.0, "rad/s", "MOVE_L tool turn rate", low=0.0, high=6.3, low_open=True),
+            positive_param("linear_speed", 0.25, "m/s", "MOVE_L tool speed", 3.0),
+            positive_param("angular_speed", 1.0, "rad/s", "MOVE_L tool turn rate", 6.3),
             Param(
                 "stream_period",
                 0.02,
@@ -124,54 +120,18 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
                 high=0.2,
             ),
             STREAM_ACCELERATION_PARAM,
-            Param(
-                "stream_timeout",
-                0.1,
-                "s",
-                "without a new SET_JOINTS before the stream brakes to rest and ends",
-                low=0.0,
-                high=5.0,
-                low_open=True,
+            positive_param(
+                "stream_timeout", 0.1, "s", "without a new SET_JOINTS before the stream brakes to rest and ends", 5.0
             ),
-            Param(
-                "reply_timeout",
-                1.0,
-                "s",
-                "longest wait for the reply to a point; none: DRIVER_FAULT",
-                low=0.0,
-                high=30.0,
-                low_open=True,
+            positive_param(
+                "reply_timeout", 1.0, "s", "longest wait for the reply to a point; none: DRIVER_FAULT", 30.0
             ),
-            Param(
-                "state_timeout",
-                0.5,
-                "s",
-                "joint state older than this counts as lost (NOT_CONNECTED)",
-                low=0.0,
-                high=10.0,
-                low_open=True,
+            positive_param(
+                "state_timeout", 0.5, "s", "joint state older than this counts as lost (NOT_CONNECTED)", 10.0
             ),
-            Param("connect_timeout", 2.0, "s", "TCP connect and first state wait", low=0.0, high=30.0, low_open=True),
-            Param("reconnect_attempts", 3, "", "connection attempts before giving up", low=1, high=20),
-            Param("reconnect_backoff", 0.5, "s", "first wait between attempts, doubled each time", low=0.0, high=10.0),
-            Param(
-                "goal_tolerance",
-                0.002,
-                "rad",
-                "largest joint error (MoveJ) / orientation error (MoveL) of the measured arm for SUCCESS",
-                low=0.0,
-                high=0.1,
-                low_open=True,
-            ),
-            Param(
-                "goal_position_tolerance",
-                0.002,
-                "m",
-                "largest measured tool position error for a MoveL SUCCESS",
-                low=0.0,
-                high=0.05,
-                low_open=True,
-            ),
+            positive_param("connect_timeout", 2.0, "s", "TCP connect and first state wait", 30.0),
+            *RECONNECT_PARAMS,
+            *GOAL_TOLERANCE_PARAMS,
             Param(
                 "settle_time",
                 1.0,
@@ -241,15 +201,11 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
         self.reply_timeout = float(reply_timeout)
         self.state_timeout = float(state_timeout)
         self.connect_timeout = float(connect_timeout)
-        self.reconnect_attempts = int(reconnect_attempts)
-        self.reconnect_backoff = float(reconnect_backoff)
-        self.goal_tolerance = float(goal_tolerance)
-        self.goal_position_tolerance = float(goal_position_tolerance)
+        self._init_controller(reconnect_attempts, reconnect_backoff, goal_tolerance, goal_position_tolerance, sleep)
         self.settle_time = float(settle_time)
         self.max_points = int(max_points)
         self.robot_name = robot_name or self.kinematics.model.name
         self._clock = clock
-        self._sleep = sleep
         # _lock guards every field below; it is held for bookkeeping only, never across a
         # socket wait, a sleep or a backoff. _send_lock serialises writes to the motion
         # socket (one sendall each), so STOP goes out at once even while a point waits.
@@ -267,11 +223,6 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
         self._state_event = threading.Condition(self._lock)
         self._fault = ""
         self._protocol_fault = ""  # latched until LOGIN: the controller sent bad data
-        self._wake = threading.Event()  # wakes a watching move at once on stop() or a fault
-        self._move_token = 0
-        self._stopped_token = 0
-        self._stop_reason = ""
-        self._active_move = None
         self._target = None
         self._target_time = 0.0
         self._streaming = False
@@ -284,16 +235,7 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
     # -- connection ------------------------------------------------------------------------
     def login(self, url: str = "", user: str = "", password: str = "") -> None:
         host = parse_controller_url(url, self.robot_ip)
-        if not host:
-            raise HwInterfaceError(
-                "no robot_ip: pass robot_ip:=<controller address> to connect to the controller", Result.LOGIN_FAILED
-            )
-        if not self.armed:
-            raise HwInterfaceError(
-                f"refusing to connect to the real robot at {host}: the driver is not armed; "
-                "check the cell is clear, then start with armed:=true",
-                Result.LOGIN_FAILED,
-            )
+        self._check_armed(host, self.armed, "the controller")
         with self._connect_lock:
             with self._lock:
                 if self._logged_in and self._motion_sock is not None and not self._protocol_fault:
@@ -323,8 +265,7 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
     def _connect_with_backoff(self, result):
         """Up to ``reconnect_attempts`` connections, the backoff slept outside every lock;
         None on success, else the HwInterfaceError to raise."""
-        delay = self.reconnect_backoff
-        for attempt in range(1, self.reconnect_attempts + 1):
+        for attempt in self._backoff_attempts():
             try:
                 self._connect_once()
                 return None
@@ -333,9 +274,6 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
                     return exc  # bad data is not fixed by trying again
                 with self._lock:
                     self._fault = f"connect to {self.robot_ip} failed (attempt {attempt}): {exc}"
-            if attempt < self.reconnect_attempts:
-                self._sleep(delay)
-                delay *= 2
         with self._lock:
             fault = self._fault
         return HwInterfaceError(f"cannot connect to the controller at {self.robot_ip}: {fault}", result)
@@ -418,12 +356,7 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
             request.error = HwInterfaceError(f"{text} before the reply to {request.what}", result)
             request.event.set()
         for sock in socks:
-            if sock is not None:
-                try:
-                    sock.shutdown(socket.SHUT_RDWR)
-                except OSError:
-                    pass
-                sock.close()
+            close_socket(sock)
         self._wake.set()
 
     def _lost(self, generation, why, protocol=False):
@@ -698,10 +631,7 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
     def set_joints(self, joints) -> None:
         self._ensure_can_move()
         with self._lock:
-            if self._active_move is not None:
-                raise HwInterfaceError(f"a {self._active_move} is running; STOP it before streaming", Result.BUSY)
-            self._target = np.asarray(joints, dtype=float)
-            self._target_time = self._clock()
+            self._set_stream_target(joints, self._clock())
             if not self._streaming:
                 # A new stream starts where the arm is, at rest, with sequence 0.
                 self._follower = StreamFollower(
@@ -815,16 +745,6 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
         )
 
     # -- internals -------------------------------------------------------------------------
-    def _joint_error(self, q, goal):
-        return float(np.max(np.abs(q - goal))), self.goal_tolerance, "rad"
-
-    def _pose_error(self, q, position, orientation):
-        reached, quat = self.kinematics.forward_pose(q)
-        distance = float(np.linalg.norm(reached - position))
-        angle = float((Rotation.from_quat(quat).inv() * Rotation.from_quat(orientation)).magnitude())
-        ratio = max(distance / self.goal_position_tolerance, angle / self.goal_tolerance)
-        return ratio * self.goal_position_tolerance, self.goal_position_tolerance, "m (position/orientation)"
-
     def _run_move(self, kind, plan, timeout, error_of):
         """Send the move's points (each with its reply), then watch the measured joints:
         SUCCESS on arrival; INTERRUPTED on stop, e-stop, error, lost connection or an arm
@@ -885,19 +805,12 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
         duration = max(distance / self.linear_speed, angle / self.angular_speed, joint_time, 1e-3)
         return min(1.0, max(joint_time / duration, 1e-3)), duration
 
-    def _interrupted(self, kind, token, why):
-        with self._lock:
-            if self._move_token == token:
-                self._active_move = None
-        return HwInterfaceError(f"{kind} interrupted: {why}", Result.INTERRUPTED)
-
     def _watch(self, kind, token, deadline, timeout, error_of):
         still_since = None
         last_q = None
         while True:
             with self._lock:
-                if self._stopped_token >= token:
-                    raise self._interrupted(kind, token, f"{self._stop_reason} (robot stopped short of the goal)")
+                self._raise_if_stopped(kind, token)
                 if self._protocol_fault:
                     raise self._interrupted(kind, token, f"bad controller data ({self._protocol_fault})")
                 if self._motion_sock is None or self._joints is None:
@@ -914,8 +827,7 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
             last_q = q
             if error <= tolerance and status.in_motion != sm.ON:
                 with self._lock:
-                    if self._move_token == token:
-                        self._active_move = None
+                    self._end_move(token)
                 return
             if moving:
                 still_since = None
@@ -926,6 +838,5 @@ class SimpleMessageDriver(UrdfModelMixin, RobotDriver):
                         kind, token, f"the arm stopped {error:.4f} {unit} from the goal (tolerance {tolerance:g})"
                     )
             if now >= deadline:
-                self.stop(reason="timeout")
-                raise HwInterfaceError(f"{kind} did not finish within {timeout:.1f} s; robot stopped", Result.TIMEOUT)
+                raise self._timed_out(kind, timeout)
             self._wake.wait(0.01)

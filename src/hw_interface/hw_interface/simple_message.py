@@ -121,6 +121,22 @@ def joint_array(values) -> tuple:
     return tuple(values + [0.0] * (MAX_JOINTS - len(values)))
 
 
+def _zero_joints() -> tuple:
+    """The default of a joint array field: 10 zero slots."""
+    return (0.0,) * MAX_JOINTS
+
+
+def _trajectory_arrays(message) -> tuple:
+    """The 30 slots of a message's positions, velocities and accelerations, in wire order
+    (the tail of JOINT_TRAJ_PT_FULL and of JOINT_FEEDBACK)."""
+    return (*joint_array(message.positions), *joint_array(message.velocities), *joint_array(message.accelerations))
+
+
+def _split_trajectory_arrays(values) -> tuple:
+    """(positions, velocities, accelerations) from their 30 decoded slots."""
+    return tuple(tuple(values[start : start + MAX_JOINTS]) for start in range(0, 3 * MAX_JOINTS, MAX_JOINTS))
+
+
 def _finite(name, values):
     for i, value in enumerate(values):
         if not math.isfinite(value):
@@ -156,7 +172,7 @@ class JointPosition:
     """JOINT_POSITION (10): ``sequence`` (int32; 0 when reporting state), ``joints`` (10 x float32)."""
 
     sequence: int = 0
-    joints: tuple = field(default_factory=lambda: (0.0,) * MAX_JOINTS)
+    joints: tuple = field(default_factory=_zero_joints)
 
     MSG_TYPE = JOINT_POSITION
     FORMAT = "i10f"
@@ -177,7 +193,7 @@ class JointTrajPt:
     limits), ``duration`` (s, of the segment to this point)."""
 
     sequence: int
-    joints: tuple = field(default_factory=lambda: (0.0,) * MAX_JOINTS)
+    joints: tuple = field(default_factory=_zero_joints)
     velocity: float = 0.0
     duration: float = 0.0
 
@@ -239,28 +255,20 @@ class JointTrajPtFull:
     sequence: int = 0
     valid_fields: int = 0
     time: float = 0.0
-    positions: tuple = field(default_factory=lambda: (0.0,) * MAX_JOINTS)
-    velocities: tuple = field(default_factory=lambda: (0.0,) * MAX_JOINTS)
-    accelerations: tuple = field(default_factory=lambda: (0.0,) * MAX_JOINTS)
+    positions: tuple = field(default_factory=_zero_joints)
+    velocities: tuple = field(default_factory=_zero_joints)
+    accelerations: tuple = field(default_factory=_zero_joints)
 
     MSG_TYPE = JOINT_TRAJ_PT_FULL
     FORMAT = "3if30f"
 
     def fields(self):
-        return (
-            self.robot_id,
-            self.sequence,
-            self.valid_fields,
-            float(self.time),
-            *joint_array(self.positions),
-            *joint_array(self.velocities),
-            *joint_array(self.accelerations),
-        )
+        return (self.robot_id, self.sequence, self.valid_fields, float(self.time), *_trajectory_arrays(self))
 
     @classmethod
     def from_fields(cls, values):
         _finite("time/positions/velocities/accelerations", values[3:])
-        return cls(*values[:4], tuple(values[4:14]), tuple(values[14:24]), tuple(values[24:34]))
+        return cls(*values[:4], *_split_trajectory_arrays(values[4:]))
 
 
 @dataclass(frozen=True)
@@ -271,27 +279,20 @@ class JointFeedback:
     robot_id: int = 0
     valid_fields: int = 0
     time: float = 0.0
-    positions: tuple = field(default_factory=lambda: (0.0,) * MAX_JOINTS)
-    velocities: tuple = field(default_factory=lambda: (0.0,) * MAX_JOINTS)
-    accelerations: tuple = field(default_factory=lambda: (0.0,) * MAX_JOINTS)
+    positions: tuple = field(default_factory=_zero_joints)
+    velocities: tuple = field(default_factory=_zero_joints)
+    accelerations: tuple = field(default_factory=_zero_joints)
 
     MSG_TYPE = JOINT_FEEDBACK
     FORMAT = "2if30f"
 
     def fields(self):
-        return (
-            self.robot_id,
-            self.valid_fields,
-            float(self.time),
-            *joint_array(self.positions),
-            *joint_array(self.velocities),
-            *joint_array(self.accelerations),
-        )
+        return (self.robot_id, self.valid_fields, float(self.time), *_trajectory_arrays(self))
 
     @classmethod
     def from_fields(cls, values):
         _finite("time/positions/velocities/accelerations", values[2:])
-        return cls(*values[:3], tuple(values[3:13]), tuple(values[13:23]), tuple(values[23:33]))
+        return cls(*values[:3], *_split_trajectory_arrays(values[3:]))
 
 
 _TYPES = {cls.MSG_TYPE: cls for cls in (Ping, JointPosition, JointTrajPt, RobotStatus, JointTrajPtFull, JointFeedback)}

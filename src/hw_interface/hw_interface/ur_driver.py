@@ -19,8 +19,10 @@ from scipy.spatial.transform import Rotation
 from motion_common.kinematics import RobotKinematics
 from motion_common.params import Param, ParamSchema
 
+from .driver_params import ARMING_PARAMS, GOAL_TOLERANCE_PARAMS, RECONNECT_PARAMS, positive_param
 from .errors import HwInterfaceError
 from .protocol import Result
+from .real_controller import RealControllerMixin
 from .robot_hw import DriverStatus, RobotDriver, UrdfModelMixin
 from .stream_follower import STREAM_ACCELERATION_PARAM, StreamFollower
 
@@ -70,7 +72,7 @@ def _stop_call(method, deceleration):
         method(deceleration)
 
 
-class URRtdeDriver(UrdfModelMixin, RobotDriver):
+class URRtdeDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
     """A Universal Robots arm over RTDE.
 
     Parameters (``PARAMETERS``, with units and ranges): ``urdf_path`` (the arm's model: joint
@@ -93,73 +95,24 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
 
     PARAMETERS = ParamSchema(
         [
-            Param("robot_ip", "", doc="controller address; empty: never connect"),
-            Param("armed", False, doc="must be true to connect and move the robot"),
+            *ARMING_PARAMS,
             Param("frequency", 500.0, "Hz", "servoJ rate: 500 e-Series, 125 CB3", low=10.0, high=1000.0),
             Param("lookahead_time", 0.1, "s", "servoJ lookahead (ur_rtde range)", low=0.03, high=0.2),
             Param("gain", 300.0, "1", "servoJ proportional gain (ur_rtde range)", low=100.0, high=2000.0),
-            Param("joint_speed", 1.0, "rad/s", "MoveJ speed of the leading joint", low=0.0, high=3.14, low_open=True),
-            Param("joint_acceleration", 1.4, "rad/s^2", "MoveJ acceleration", low=0.0, high=40.0, low_open=True),
-            Param("linear_speed", 0.25, "m/s", "MoveL tool speed", low=0.0, high=3.0, low_open=True),
-            Param("linear_acceleration", 1.2, "m/s^2", "MoveL tool acceleration", low=0.0, high=150.0, low_open=True),
-            Param(
-                "joint_stop_deceleration",
-                2.0,
-                "rad/s^2",
-                "stopJ deceleration (STOP of a MoveJ)",
-                low=0.0,
-                high=40.0,
-                low_open=True,
-            ),
-            Param(
-                "linear_stop_deceleration",
-                10.0,
-                "m/s^2",
-                "stopL deceleration (STOP of a MoveL)",
-                low=0.0,
-                high=150.0,
-                low_open=True,
-            ),
-            Param(
-                "servo_stop_deceleration",
-                10.0,
-                "rad/s^2",
-                "servoStop deceleration (STOP of streaming)",
-                low=0.0,
-                high=40.0,
-                low_open=True,
+            positive_param("joint_speed", 1.0, "rad/s", "MoveJ speed of the leading joint", 3.14),
+            positive_param("joint_acceleration", 1.4, "rad/s^2", "MoveJ acceleration", 40.0),
+            positive_param("linear_speed", 0.25, "m/s", "MoveL tool speed", 3.0),
+            positive_param("linear_acceleration", 1.2, "m/s^2", "MoveL tool acceleration", 150.0),
+            positive_param("joint_stop_deceleration", 2.0, "rad/s^2", "stopJ deceleration (STOP of a MoveJ)", 40.0),
+            positive_param("linear_stop_deceleration", 10.0, "m/s^2", "stopL deceleration (STOP of a MoveL)", 150.0),
+            positive_param(
+                "servo_stop_deceleration", 10.0, "rad/s^2", "servoStop deceleration (STOP of streaming)", 40.0
             ),
             STREAM_ACCELERATION_PARAM,
-            Param(
-                "stream_timeout",
-                0.1,
-                "s",
-                "without a new SET_JOINTS before streaming stops",
-                low=0.0,
-                high=5.0,
-                low_open=True,
-            ),
+            positive_param("stream_timeout", 0.1, "s", "without a new SET_JOINTS before streaming stops", 5.0),
             Param("gripper_output", 0, "", "standard digital output driving the gripper", low=0, high=7),
-            Param("reconnect_attempts", 3, "", "connection attempts before giving up", low=1, high=20),
-            Param("reconnect_backoff", 0.5, "s", "first wait between attempts, doubled each time", low=0.0, high=10.0),
-            Param(
-                "goal_tolerance",
-                0.002,
-                "rad",
-                "largest joint error (MoveJ) / orientation error (MoveL) of the measured arm for SUCCESS",
-                low=0.0,
-                high=0.1,
-                low_open=True,
-            ),
-            Param(
-                "goal_position_tolerance",
-                0.002,
-                "m",
-                "largest measured tool position error for a MoveL SUCCESS",
-                low=0.0,
-                high=0.05,
-                low_open=True,
-            ),
+            *RECONNECT_PARAMS,
+            *GOAL_TOLERANCE_PARAMS,
             Param(
                 "settle_time", 0.5, "s", "how long a finished move may take to come within tolerance", low=0.0, high=5.0
             ),
@@ -215,15 +168,11 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         # and acceleration limits, so no client (a stale stream, a burst) can make a lurch.
         self._follower: StreamFollower | None = None
         self.gripper_output = int(gripper_output)
-        self.reconnect_attempts = int(reconnect_attempts)
-        self.reconnect_backoff = float(reconnect_backoff)
-        self.goal_tolerance = float(goal_tolerance)
-        self.goal_position_tolerance = float(goal_position_tolerance)
+        self._init_controller(reconnect_attempts, reconnect_backoff, goal_tolerance, goal_position_tolerance, sleep)
         self.settle_time = float(settle_time)
         self.robot_name = robot_name or self.kinematics.model.name
         self._classes = rtde_classes
         self._clock = clock
-        self._sleep = sleep
         self._control = self._receive = self._io = None
         # _lock guards the RTDE objects and the motion/streaming state. It is only ever held
         # for single controller calls: never across a motion, a sleep or a backoff.
@@ -239,34 +188,19 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         self._stream_generation = 0
         self._fault = ""
         self._gripper_on = False
-        self._active_move = None  # "moveJ" / "moveL" while an asynchronous move runs
-        self._move_token = 0  # increases with every move
-        self._stopped_token = 0  # the last move token a stop() cut short
-        self._stop_reason = ""
-        self._wake = threading.Event()  # wakes a watching move at once on stop()
         self.servo_periods = 0
         self.missed_periods = 0
 
     # -- connection ------------------------------------------------------------------------
     def login(self, url: str = "", user: str = "", password: str = "") -> None:
         ip = url.replace("ur://", "").strip("/") if url and not url.startswith("sim") else self.robot_ip
-        if not ip:
-            raise HwInterfaceError(
-                "no robot_ip: pass robot_ip:=<controller address> to connect to a UR", Result.LOGIN_FAILED
-            )
-        if not self.armed:
-            raise HwInterfaceError(
-                f"refusing to connect to the real robot at {ip}: the driver is not armed; "
-                "check the cell is clear, then start with armed:=true",
-                Result.LOGIN_FAILED,
-            )
+        self._check_armed(ip, self.armed, "a UR")
         with self._connect_lock:
             with self._lock:
                 if self._control is not None:
                     return
             control_cls, receive_cls, io_cls = self._classes or _rtde_classes()
-            delay = self.reconnect_backoff
-            for attempt in range(1, self.reconnect_attempts + 1):
+            for attempt in self._backoff_attempts():
                 try:
                     receive = receive_cls(ip)
                     control = control_cls(ip)
@@ -279,9 +213,6 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                 except Exception as exc:  # ur_rtde raises RuntimeError; anything else is as fatal
                     with self._lock:
                         self._fault = f"connect to {ip} failed (attempt {attempt}): {exc}"
-                    if attempt < self.reconnect_attempts:
-                        self._sleep(delay)  # never under the driver lock
-                        delay *= 2
             raise HwInterfaceError(f"cannot connect to the UR controller at {ip}: {self._fault}", Result.LOGIN_FAILED)
 
     def disconnect(self) -> None:
@@ -376,10 +307,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
     def set_joints(self, joints) -> None:
         self._ensure_can_move()
         with self._lock:
-            if self._active_move is not None:
-                raise HwInterfaceError(f"a {self._active_move} is running; STOP it before streaming", Result.BUSY)
-            self._target = np.asarray(joints, dtype=float)
-            self._target_time = time.monotonic()
+            self._set_stream_target(joints, time.monotonic())
             if not self._streaming.is_set():
                 # A new stream starts where the arm is, at rest.
                 self._follower = StreamFollower(
@@ -443,17 +371,6 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                 raise HwInterfaceError(f"controller refused digital output {output}", Result.DRIVER_FAULT)
 
     # -- internals -------------------------------------------------------------------------
-    def _joint_error(self, q, goal):
-        return float(np.max(np.abs(q - goal))), self.goal_tolerance, "rad"
-
-    def _pose_error(self, q, position, orientation):
-        reached, quat = self.kinematics.forward_pose(q)
-        distance = float(np.linalg.norm(reached - np.asarray(position, dtype=float)))
-        angle = float((Rotation.from_quat(quat).inv() * Rotation.from_quat(orientation)).magnitude())
-        # Report the worse of the two as a fraction of its tolerance, in metres for the message.
-        ratio = max(distance / self.goal_position_tolerance, angle / self.goal_tolerance)
-        return ratio * self.goal_position_tolerance, self.goal_position_tolerance, "m (position/orientation)"
-
     def _start_move(self, kind, issue):
         """Issue an asynchronous move under the lock (briefly); return its token and the
         async progress value before it, to detect its end."""
@@ -476,12 +393,6 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
             f"{kind} refused by the controller (unreachable or outside its limits)", Result.DRIVER_FAULT
         )
 
-    def _interrupted(self, kind, token, why):
-        with self._lock:
-            if self._move_token == token:
-                self._active_move = None
-        return HwInterfaceError(f"{kind} interrupted: {why}", Result.INTERRUPTED)
-
     def _watch(self, kind, token, before, timeout, error_of):
         """Follow an asynchronous move to its end at the controller period, taking the lock
         only for each poll; raise INTERRUPTED, TIMEOUT, or return once arrived."""
@@ -490,8 +401,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
         ended_at = None
         while True:
             with self._lock:
-                if self._stopped_token >= token:
-                    raise self._interrupted(kind, token, f"{self._stop_reason} (robot stopped short of the goal)")
+                self._raise_if_stopped(kind, token)
                 if self._control is None:
                     raise self._interrupted(kind, token, "the driver disconnected")
                 try:
@@ -511,8 +421,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                         seen_running = True
                     elif seen_running or progress != before:
                         ended_at = now
-                        if self._move_token == token:
-                            self._active_move = None
+                        self._end_move(token)
                 if ended_at is not None:
                     error, tolerance, unit = error_of(q)
                     if error <= tolerance:
@@ -526,8 +435,7 @@ class URRtdeDriver(UrdfModelMixin, RobotDriver):
                 elif now >= deadline:
                     pass  # handled below, outside the poll
             if ended_at is None and self._clock() >= deadline:
-                self.stop(reason="timeout")
-                raise HwInterfaceError(f"{kind} did not finish within {timeout:.1f} s; robot stopped", Result.TIMEOUT)
+                raise self._timed_out(kind, timeout)
             self._wake.wait(self.period)
 
     def _stop_streaming(self):

@@ -6,11 +6,9 @@ still), streaming, e-stop and error mapping, reconnect with backoff outside the 
 controller that does not reply, and every malformed input answered DRIVER_FAULT without a
 crash and without motion."""
 
-import inspect
 import os
 import socket
 import struct
-import threading
 import time
 
 import numpy as np
@@ -26,6 +24,7 @@ from hw_interface.testing.fake_simple_message import FakeSimpleMessageController
 
 from ..conftest import ROOT
 from ..stop_helpers import stop_during, wait_for
+from .driver_helpers import LockProbingSleep, assert_imports_no_fake, assert_refuses_unless_armed, assert_still
 
 TX90 = os.path.join(ROOT, "src", "motion_common", "urdf", "tx90.urdf")
 START = np.array([0.0, 0.4, 1.6, 0.0, 1.14, 0.0])  # motion_common/config/robots/tx90.yaml
@@ -70,20 +69,8 @@ def driver(fake):
         d.disconnect()
 
 
-def assert_still(fake, bound=2.0):
-    """The simulated arm comes to rest and stays exactly there."""
-    assert wait_for(lambda: not fake.is_moving(), bound), "the arm never came to rest"
-    rest = fake.q.copy()
-    time.sleep(0.1)
-    np.testing.assert_array_equal(fake.q, rest)
-
-
 def test_refuses_to_connect_unless_armed_with_an_address(fake):
-    with pytest.raises(HwInterfaceError, match="not armed") as err:
-        make(fake, armed=False).login()
-    assert err.value.result == Result.LOGIN_FAILED
-    with pytest.raises(HwInterfaceError, match="robot_ip"):
-        make(fake, robot_ip="").login()
+    assert_refuses_unless_armed(lambda **kw: make(fake, **kw))
     assert fake.connections == 0  # nothing was even opened
     assert parse_controller_url("simple_message://10.0.0.5/", "x") == "10.0.0.5"
     assert parse_controller_url("sim://", "10.0.0.7") == "10.0.0.7"
@@ -253,28 +240,15 @@ def test_dropped_connections_interrupt_a_move_and_are_reconnected(driver, fake):
 
 
 def test_reconnect_backs_off_outside_the_driver_lock(fake):
-    sleeps, lock_free = [], []
-
-    def probe():
-        got = d._lock.acquire(timeout=1.0)
-        if got:
-            d._lock.release()
-        lock_free.append(got)
-
-    def sleep(seconds):
-        sleeps.append(seconds)
-        thread = threading.Thread(target=probe)  # a STOP or a status read meanwhile
-        thread.start()
-        thread.join()
-
-    d = make(fake, reconnect_attempts=3, reconnect_backoff=0.25, sleep=sleep, connect_timeout=0.3)
+    sleep = LockProbingSleep()
+    d = sleep.driver = make(fake, reconnect_attempts=3, reconnect_backoff=0.25, sleep=sleep, connect_timeout=0.3)
     d.login()
     fake.drop_connections(refuse=True)
     assert wait_for(lambda: not d.status().connected)
     with pytest.raises(HwInterfaceError) as err:
         d.get_robot_joints()
     assert err.value.result == Result.NOT_CONNECTED
-    assert sleeps == [0.25, 0.5] and lock_free == [True, True]
+    assert sleep.sleeps == [0.25, 0.5] and sleep.lock_free == [True, True]
     fake.accept_connections()  # cable back in
     np.testing.assert_allclose(d.get_robot_joints(), START, atol=1e-6)
     d.disconnect()
@@ -437,10 +411,7 @@ def test_registry_builds_both_and_the_driver_imports_no_fake():
     assert schema.params["byte_order"].choices == ("little", "big")
     import hw_interface.industrial_driver as production
 
-    imports = [
-        line for line in inspect.getsource(production).splitlines() if line.lstrip().startswith(("import", "from"))
-    ]
-    assert not [line for line in imports if "fake" in line or "testing" in line]
+    assert_imports_no_fake(production)
 
 
 def test_no_gripper_or_io_in_the_standard_set(driver):

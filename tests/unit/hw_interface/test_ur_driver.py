@@ -3,7 +3,6 @@ which moves the arm in real time): arming, motions, STOP from another thread, ti
 arrival checks, streaming, IO, backoff with an injected sleep, and fault injection
 (protective stop, dropped connection, driver exceptions)."""
 
-import inspect
 import threading
 import time
 
@@ -19,6 +18,7 @@ from hw_interface.ur_driver import URRtdeDriver, pose_to_ur, ur_to_pose
 
 from ..conftest import HOME, UR5E
 from ..stop_helpers import stop_during, wait_for
+from .driver_helpers import LockProbingSleep, assert_imports_no_fake, assert_refuses_unless_armed, assert_still
 
 
 @pytest.fixture
@@ -35,11 +35,7 @@ def make(fake, **kw):
 
 
 def test_refuses_to_connect_unless_armed_with_an_ip(fake):
-    with pytest.raises(HwInterfaceError, match="not armed") as err:
-        make(fake, armed=False).login()
-    assert err.value.result == Result.LOGIN_FAILED
-    with pytest.raises(HwInterfaceError, match="robot_ip"):
-        make(fake, robot_ip="").login()
+    assert_refuses_unless_armed(lambda **kw: make(fake, **kw))
     assert fake.connections == 0  # nothing was even opened
 
 
@@ -77,14 +73,6 @@ def test_move_j_and_move_l_are_async_on_the_controller_and_succeed_on_arrival(fa
 LONG_J = HOME + [2.8, 0.0, 0.0, 0.0, 0.0, 0.0]  # ~3.5 s at 1 rad/s, 1.4 rad/s^2
 
 
-def assert_still_after_decel(fake, bound=2.0):
-    """Once the stop's deceleration is over the fake arm stays exactly where it halted."""
-    assert wait_for(lambda: not fake.is_moving(), bound), "the arm never came to rest"
-    rest = fake.q.copy()
-    time.sleep(0.1)
-    np.testing.assert_array_equal(fake.q, rest)
-
-
 def test_stop_from_another_thread_interrupts_move_j_promptly(fake):
     driver = make(fake)
     driver.login()
@@ -94,7 +82,7 @@ def test_stop_from_another_thread_interrupts_move_j_promptly(fake):
     assert stop_took < 0.2 and runner.returned_at - stop_at < 0.2
     assert runner.error is not None and runner.error.result == Result.INTERRUPTED, runner.error
     assert "stopJ" in fake.names() and "stopL" not in fake.names()
-    assert_still_after_decel(fake)
+    assert_still(fake)
     assert fake.q[0] < LONG_J[0] - 1.0  # cut short, far from the goal
     assert driver.status().connected and not driver.status().moving
 
@@ -111,7 +99,7 @@ def test_stop_from_another_thread_interrupts_move_l_with_stop_l(fake):
     assert runner.returned_at - stop_at < 0.2
     assert runner.error.result == Result.INTERRUPTED
     assert [c for c in fake.calls if c[0] == "stopL"][-1][1] == (10.0, True)
-    assert_still_after_decel(fake)
+    assert_still(fake)
     assert np.linalg.norm(driver.get_robot_cartesian_position()[0] - goal) > 0.1
 
 
@@ -122,7 +110,7 @@ def test_move_past_timeout_stops_the_robot_and_answers_timeout(fake):
         driver.move_j(LONG_J, timeout=0.3)
     assert err.value.result == Result.TIMEOUT
     assert "stopJ" in fake.names()
-    assert_still_after_decel(fake)
+    assert_still(fake)
     assert fake.q[0] < LONG_J[0] - 1.0
 
 
@@ -164,7 +152,7 @@ def test_streaming_stop_uses_servo_stop_and_the_arm_halts(fake):
     assert wait_for(lambda: np.max(np.abs(fake.q - HOME)) > 0.005)
     driver.stop()
     assert [c for c in fake.calls if c[0] == "servoStop"][-1][1] == (10.0,)
-    assert_still_after_decel(fake)
+    assert_still(fake)
 
 
 def test_streaming_uses_servoj_and_servo_stop_precedes_other_moves(fake):
@@ -265,27 +253,14 @@ def test_connect_retries_with_backoff_then_fails():
 
 
 def test_reconnect_backoff_sleeps_outside_the_driver_lock(fake):
-    sleeps, lock_free = [], []
-
-    def probe():
-        got = driver._lock.acquire(timeout=1.0)
-        if got:
-            driver._lock.release()
-        lock_free.append(got)
-
-    def sleep(seconds):
-        sleeps.append(seconds)
-        thread = threading.Thread(target=probe)  # a STOP or a status read meanwhile
-        thread.start()
-        thread.join()
-
-    driver = make(fake, reconnect_attempts=3, reconnect_backoff=0.25, sleep=sleep)
+    sleep = LockProbingSleep()
+    driver = sleep.driver = make(fake, reconnect_attempts=3, reconnect_backoff=0.25, sleep=sleep)
     driver.login()
     fake.drop_connection(allow_reconnect=False)
     with pytest.raises(HwInterfaceError) as err:
         driver.get_robot_joints()
     assert err.value.result == Result.NOT_CONNECTED
-    assert sleeps == [0.25, 0.5] and lock_free == [True, True]
+    assert sleep.sleeps == [0.25, 0.5] and sleep.lock_free == [True, True]
     assert fake.names().count("reconnect") == 3
 
 
@@ -296,10 +271,7 @@ def test_registry_builds_the_ur_driver_and_checks_servo_ranges(fake):
         create_driver("ur_rtde", urdf_path=UR5E, fake_controller=True)  # no flag: the fake is injected
     import hw_interface.ur_driver as production
 
-    imports = [
-        line for line in inspect.getsource(production).splitlines() if line.lstrip().startswith(("import", "from"))
-    ]
-    assert not [line for line in imports if "fake" in line or "testing" in line]
+    assert_imports_no_fake(production)
     with pytest.raises(HwInterfaceError, match="lookahead"):
         URRtdeDriver(UR5E, lookahead_time=1.0)
     with pytest.raises(HwInterfaceError, match="gain"):
@@ -320,7 +292,6 @@ def test_ur_rtde_fake_driver_starts_at_the_start_pose_and_checks_its_parameters(
 
 
 def test_a_stop_then_a_new_target_never_leaves_two_servoj_loops(fake):
-    import threading
 
     driver = make(fake, stream_timeout=5.0)
     driver.login()

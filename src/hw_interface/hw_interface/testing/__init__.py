@@ -5,8 +5,10 @@ records every call and simulates the arm in real time, and ``fake_ur_driver``, t
 to it (the registry name ``ur_rtde_fake``); ``fake_simple_message``: a byte-level simulated
 ROS-Industrial controller serving simple_message on two TCP ports
 (``FakeSimpleMessageController``), and ``fake_simple_message_driver``, the simple_message
-driver wired to it (``simple_message_fake``). Production code never imports this package:
-the fake is selected by that name.
+driver wired to it (``simple_message_fake``). Both simulated controllers share
+``fault_injection`` (a fault halts the arm until cleared) and both fake drivers
+``fake_parameters`` (the start pose on top of the driver's parameters). Production code
+never imports this package: the fake is selected by that name.
 
 The names in ``__all__`` are imported from their module on first use.
 """

@@ -29,9 +29,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from motion_common.kinematics import RobotKinematics
-from motion_common.params import Param, ParamSchema
 
 from ..ur_driver import URRtdeDriver, pose_to_ur
+from .fake_parameters import fake_driver_parameters
+from .fault_injection import FaultInjection
 
 # Joint speed (rad/s) servoJ may use, and the speed under which the arm counts as steady.
 SERVO_MAX_SPEED = 3.14
@@ -75,7 +76,7 @@ class _PathMotion:
         return self.s >= self.length or (self.stop_deceleration is not None and self.v <= 0.0)
 
 
-class FakeUR:
+class FakeUR(FaultInjection):
     """The simulated controller shared by the three fake interfaces."""
 
     def __init__(
@@ -134,21 +135,15 @@ class FakeUR:
 
     def trigger_protective_stop(self):
         """A protective stop: the arm halts at once, motion is refused until cleared."""
-        with self.lock:
-            self._protective_stopped = True
-            self._halt()
+        self._inject_fault(_protective_stopped=True)
 
     def clear_protective_stop(self):
         """Cleared on the pendant."""
-        with self.lock:
-            self._protective_stopped = False
+        self._clear_fault(_protective_stopped=False)
 
     def drop_connection(self, allow_reconnect: bool = True):
         """Simulate a dropped cable; reconnect() succeeds only if ``allow_reconnect``."""
-        with self.lock:
-            self.connected = False
-            self.allow_reconnect = allow_reconnect
-            self._halt()
+        self._inject_fault(connected=False, allow_reconnect=allow_reconnect)
 
     def is_moving(self):
         """True while the simulated arm moves (any joint faster than STEADY_SPEED)."""
@@ -453,17 +448,4 @@ def fake_ur_driver(
     return driver
 
 
-fake_ur_driver.PARAMETERS = URRtdeDriver.PARAMETERS.merged(
-    ParamSchema(
-        [
-            Param(
-                "initial_joints",
-                None,
-                "rad",
-                "start pose of the fake arm (motion_common/config/robots/<robot>.yaml)",
-                kind=list,
-                nullable=True,
-            )
-        ]
-    )
-)
+fake_ur_driver.PARAMETERS = fake_driver_parameters(URRtdeDriver.PARAMETERS)

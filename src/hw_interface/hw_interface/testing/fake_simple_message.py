@@ -31,10 +31,13 @@ import time
 import numpy as np
 
 from motion_common.kinematics import RobotKinematics
-from motion_common.params import Param, ParamSchema
 
 from .. import simple_message as sm
+from ..driver_params import positive_param
 from ..industrial_driver import SimpleMessageDriver
+from ..tcp import close_socket
+from .fake_parameters import fake_driver_parameters
+from .fault_injection import FaultInjection
 
 __all__ = ["FakeSimpleMessageController", "fake_simple_message_driver"]
 
@@ -86,24 +89,14 @@ class _Server:
     def drop_client(self):
         with self.lock:
             client, self.client = self.client, None
-        if client is not None:
-            try:
-                client.shutdown(socket.SHUT_RDWR)
-            except OSError:
-                pass
-            client.close()
+        close_socket(client)
 
     def close_listener(self):
-        if self.listener is not None:
-            try:
-                self.listener.shutdown(socket.SHUT_RDWR)
-            except OSError:
-                pass
-            self.listener.close()
-            self.listener = None
+        close_socket(self.listener)
+        self.listener = None
 
 
-class FakeSimpleMessageController:
+class FakeSimpleMessageController(FaultInjection):
     """The simulated controller; ``start()`` opens both ports (``motion_port`` and
     ``state_port``: 0 picks free ones, read back after start), ``close()`` ends it."""
 
@@ -181,23 +174,17 @@ class FakeSimpleMessageController:
     # -- injection -------------------------------------------------------------------------
     def trigger_estop(self):
         """Emergency stop: the arm halts at once; points are refused until cleared."""
-        with self.lock:
-            self.estop = True
-            self._halt()
+        self._inject_fault(estop=True)
 
     def clear_estop(self):
-        with self.lock:
-            self.estop = False
+        self._clear_fault(estop=False)
 
     def set_error(self, code: int):
         """The controller goes into error ``code``: the arm halts, points are refused."""
-        with self.lock:
-            self.error_code = int(code)
-            self._halt()
+        self._inject_fault(error_code=int(code))
 
     def clear_error(self):
-        with self.lock:
-            self.error_code = 0
+        self._clear_fault(error_code=0)
 
     def drop_connections(self, refuse: bool = False, ports=("motion", "state")):
         """Close the client connections of ``ports`` (both: a pulled cable); with ``refuse``
@@ -470,26 +457,9 @@ class _FakeControllerDriver(SimpleMessageDriver):
         super().login("", user, password)
 
 
-fake_simple_message_driver.PARAMETERS = SimpleMessageDriver.PARAMETERS.merged(
-    ParamSchema(
-        [
-            Param(
-                "initial_joints",
-                None,
-                "rad",
-                "start pose of the simulated arm (motion_common/config/robots/<robot>.yaml)",
-                kind=list,
-                nullable=True,
-            ),
-            Param(
-                "fake_stop_deceleration",
-                20.0,
-                "rad/s^2",
-                "how hard the simulated controller brakes on STOP_TRAJECTORY",
-                low=0.0,
-                high=1000.0,
-                low_open=True,
-            ),
-        ]
-    )
+fake_simple_message_driver.PARAMETERS = fake_driver_parameters(
+    SimpleMessageDriver.PARAMETERS,
+    positive_param(
+        "fake_stop_deceleration", 20.0, "rad/s^2", "how hard the simulated controller brakes on STOP_TRAJECTORY", 1000.0
+    ),
 )
