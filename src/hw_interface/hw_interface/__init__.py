@@ -17,7 +17,8 @@ Its modules, by role:
   parameters they declare alike);
 - the server's core: ``protocol`` (commander.srv's command and result tables as enums),
   ``dispatcher`` (checks every request, then calls the driver), ``server_params`` (the
-  server's parameters and its drivers' parameter check);
+  server's parameters and its drivers' parameter check), ``status_log`` (which driver
+  status changes reach the console, and how loudly);
 - ``controller_client``: ``MotionControllerClient``, the Python client of
   /motion_controller; a ROS edge (rospy and the generated ``motion_commander/commander``
   service);
