@@ -1,0 +1,236 @@
+"""How far the tool trails the hand: the lag, end to end and per stage, of a teleop session.
+
+For each recording and filter, one session of launch/teleop_sim.launch (pybullet arm, UR5e)
+is recorded by a listener node, and the lag L of each stage is the one that best explains
+the stage's output as an affine map of its input delayed by L (least squares over the
+engaged span, L searched from 0 to 300 ms in 2 ms steps):
+
+    raw hand (motion_sensor/raw_hand, sensor stamps)
+      -> filtered hand (motion_sensor/hand, sensor stamps: the filter's lag)
+      -> core target (motion_commander/target: mapping, speed and step limits)
+      -> commanded joints (motion_commander/command, as tool positions by forward kinematics)
+      -> measured tool (motion_controller/tool_pose, stamped when measured)
+
+and hand -> tool end to end. An affine map absorbs the speed ratio and the frame change, so
+only the delay is left. Stages are not additive exactly (each fit is its own), but close.
+
+"none" is the mean filter over one frame (no smoothing). The default session is the mean
+filter over 10 frames. Recordings come from ../shared/data/leap_v6 (real Leap streams),
+falling back to tests/data.
+
+Run: bench/run hand_to_tool [--recordings NAME ...] [--filters none mean one_euro kalman]
+Writes bench/results/hand_to_tool.json (top level hand_to_tool_ms_p50: over the recordings,
+default session) and bench/results/hand_to_tool.png (hand and tool against time, one
+recording).
+"""
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from bench_common import RESULTS, write_results
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+SHARED = os.path.abspath(os.path.join(ROOT, "..", "shared", "data", "leap_v6"))
+# Slow and fast hands, one and two hands in view, several frame rates.
+DEFAULT = ["brian", "test-paddle-rightwards", "Waiting-110fps", "wave", "flapping", "rollAndPitchCropped"]
+FILTERS = {
+    "none": ["filter:=mean", "queue_size:=1"],
+    "mean": [],
+    "one_euro": ["filter:=one_euro"],
+    "kalman": ["filter:=kalman"],
+}
+PORT = 11481
+LAGS_S = np.arange(0.0, 0.3001, 0.002)
+STAGES = [("raw", "filtered"), ("filtered", "target"), ("target", "commanded"), ("commanded", "tool"), ("raw", "tool")]
+
+
+def recording_path(name):
+    for folder in (SHARED, os.path.join(ROOT, "tests", "data")):
+        path = os.path.join(folder, name + ".jsonl.gz")
+        if os.path.exists(path):
+            return path
+    raise SystemExit(f"hand_to_tool: no recording {name!r} in {SHARED} or tests/data")
+
+
+def best_lag(source, follower, lags=LAGS_S):
+    """(lag s, residual rms m) of the affine map follower(t) ~ A source(t - lag) + b.
+
+    ``source`` and ``follower`` are arrays of rows (t, values...); the follower's samples
+    count only where the delayed source is defined. None when too few samples overlap."""
+    best = None
+    for lag in lags:
+        t = follower[:, 0] - lag
+        inside = (t >= source[0, 0]) & (t <= source[-1, 0])
+        if inside.sum() < 20:
+            continue
+        x = np.column_stack([np.interp(t[inside], source[:, 0], source[:, k]) for k in range(1, source.shape[1])])
+        y = follower[inside, 1:]
+        design = np.column_stack([x, np.ones(len(x))])
+        coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+        rms = float(np.sqrt(np.mean((design @ coef - y) ** 2)))
+        if best is None or rms < best[1]:
+            best = (float(lag), rms)
+    return best
+
+
+def engaged_span(streams):
+    """The part of every stream inside the span of the core's targets (engaged)."""
+    target = streams["target"]
+    start, end = target[0, 0], target[-1, 0]
+    return {name: rows[(rows[:, 0] >= start) & (rows[:, 0] <= end)] for name, rows in streams.items()}
+
+
+def stage_lags(streams):
+    """Lag (ms) of each stage and end to end."""
+    streams = engaged_span(streams)
+    result = {}
+    for source, follower in STAGES:
+        fit = best_lag(streams[source], streams[follower])
+        result[f"{source}->{follower}"] = None if fit is None else round(1000.0 * fit[0], 1)
+    return result
+
+
+def record(out_path):
+    """The listener: a node that records the five streams until the replay has finished."""
+    import rospy
+    from geometry_msgs.msg import PoseStamped
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import Bool
+
+    from motion_common.kinematics import RobotKinematics
+    from motion_sensor.msg import hand
+
+    robot = RobotKinematics(os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf"))
+    rows = {name: [] for name in ("raw", "filtered", "target", "commanded", "tool")}
+    done = []
+
+    def on_hand(name):
+        def callback(msg):
+            if msg.hands_num:
+                p = msg.position
+                rows[name].append((msg.header.stamp.to_sec(), p.x, p.y, p.z))
+
+        return callback
+
+    def on_pose(name):
+        def callback(msg):
+            p = msg.pose.position
+            rows[name].append((msg.header.stamp.to_sec(), p.x, p.y, p.z))
+
+        return callback
+
+    def on_command(msg):
+        rows["commanded"].append((msg.header.stamp.to_sec(), *robot.forward(list(msg.position)).translation))
+
+    rospy.init_node("hand_to_tool_recorder", disable_signals=True)
+    rospy.Subscriber("/motion_sensor/raw_hand", hand, on_hand("raw"), queue_size=1000)
+    rospy.Subscriber("/motion_sensor/hand", hand, on_hand("filtered"), queue_size=1000)
+    rospy.Subscriber("/motion_commander/target", PoseStamped, on_pose("target"), queue_size=1000)
+    rospy.Subscriber("/motion_commander/command", JointState, on_command, queue_size=1000)
+    rospy.Subscriber("/motion_controller/tool_pose", PoseStamped, on_pose("tool"), queue_size=1000)
+    rospy.Subscriber("/hand_replay/finished", Bool, lambda m: m.data and done.append(time.monotonic()), queue_size=1)
+    deadline = time.monotonic() + 300.0
+    while not (done and time.monotonic() > done[0] + 1.0) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    np.savez(out_path, **{name: np.array(values, dtype=float).reshape(-1, 4) for name, values in rows.items()})
+
+
+def run_session(recording, filter_args, workdir):
+    """One session recorded; the five streams as arrays of rows (t, x, y, z)."""
+    env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}", ROS_HOME=workdir)
+    out = os.path.join(workdir, "streams.npz")
+    launch = subprocess.Popen(
+        [
+            "roslaunch",
+            "-p",
+            str(PORT),
+            os.path.join(ROOT, "src", "motion_bringup", "launch", "teleop_sim.launch"),
+            f"recording:={recording}",
+            f"output_dir:={workdir}",
+            "exit_when_done:=false",
+            "monitor:=false",
+            *filter_args,
+        ],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        subprocess.run([sys.executable, os.path.abspath(__file__), "--record", out], env=env, timeout=360, check=True)
+    finally:
+        launch.send_signal(signal.SIGINT)
+        launch.wait(timeout=60)
+    data = np.load(out)
+    return {name: data[name] for name in data.files}
+
+
+def plot(streams, title, path):
+    import matplotlib.pyplot as plt
+
+    from motion_common.atomic_file import write_atomic
+
+    streams = engaged_span(streams)
+    figure, axis = plt.subplots(figsize=(9, 4))
+    t0 = streams["raw"][0, 0]
+    for name, colour in (("raw", "tab:blue"), ("target", "tab:orange"), ("tool", "tab:green")):
+        rows = streams[name]
+        axis.plot(rows[:, 0] - t0, 1000.0 * (rows[:, 1] - rows[0, 1]), colour, label=name, linewidth=1)
+    axis.set_xlabel("time (s)")
+    axis.set_ylabel("x from its start (mm; raw hand unscaled)")
+    axis.set_title(title)
+    axis.legend()
+    figure.tight_layout()
+    temporary = path + ".tmp.png"
+    figure.savefig(temporary, dpi=100)
+    plt.close(figure)
+    with open(temporary, "rb") as stream:
+        write_atomic(path, stream.read())
+    os.remove(temporary)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--recordings", nargs="+", default=DEFAULT, help="recording names (default: %(default)s)")
+    parser.add_argument("--filters", nargs="+", default=list(FILTERS), choices=list(FILTERS), help="filters to run")
+    parser.add_argument("--record", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.record:
+        record(args.record)
+        return
+    results = {"method": "affine fit of each stage's output to its input delayed by L; L in 0-300 ms, 2 ms steps"}
+    per = {}
+    total = len(args.recordings) * len(args.filters)
+    done = 0
+    for name in args.recordings:
+        path = recording_path(name)
+        per[name] = {}
+        for filter_name in args.filters:
+            with tempfile.TemporaryDirectory(prefix="hand-to-tool-") as workdir:
+                streams = run_session(path, FILTERS[filter_name], workdir)
+            done += 1
+            if len(streams["target"]) < 20:
+                per[name][filter_name] = {"error": "the clutch never engaged"}
+            else:
+                per[name][filter_name] = stage_lags(streams)
+                if name == args.recordings[0] and filter_name == "mean":
+                    plot(streams, f"{name}: hand, core target and tool (x)", os.path.join(RESULTS, "hand_to_tool.png"))
+            print(f"[{done}/{total}] {name:26s} {filter_name:9s} {per[name][filter_name]}", flush=True)
+    results["recordings"] = per
+    for filter_name in args.filters:
+        ends = [per[n][filter_name].get("raw->tool") for n in per if per[n][filter_name].get("raw->tool") is not None]
+        results[f"{filter_name}_hand_to_tool_ms_p50"] = float(np.median(ends)) if ends else None
+    results["hand_to_tool_ms_p50"] = results.get("mean_hand_to_tool_ms_p50")
+    write_results("hand_to_tool", results, show=False)
+    print(json.dumps({k: v for k, v in results.items() if k.endswith("p50")}, indent=2))
+
+
+if __name__ == "__main__":
+    main()
