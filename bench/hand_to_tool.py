@@ -49,6 +49,7 @@ FILTERS = {
 }
 PORT = 11481
 LAGS_S = np.arange(0.0, 0.3001, 0.002)
+MIN_SPAN_M = 0.02  # a stage's input must move at least this far (any axis) for its lag to count
 STAGES = [("raw", "filtered"), ("filtered", "target"), ("target", "commanded"), ("commanded", "tool"), ("raw", "tool")]
 
 
@@ -88,13 +89,21 @@ def engaged_span(streams):
     return {name: rows[(rows[:, 0] >= start) & (rows[:, 0] <= end)] for name, rows in streams.items()}
 
 
-def stage_lags(streams):
-    """Lag (ms) of each stage and end to end."""
+def stage_lags(streams, min_span=MIN_SPAN_M):
+    """Lag (ms) of each stage and end to end; None where it cannot be told: a stage whose
+    input moves less than ``min_span`` (a still hand fits any lag) or whose best fit lies
+    at the end of the search (the output does not follow the input within it, e.g. the arm
+    held at a joint limit)."""
     streams = engaged_span(streams)
     result = {}
     for source, follower in STAGES:
-        fit = best_lag(streams[source], streams[follower])
-        result[f"{source}->{follower}"] = None if fit is None else round(1000.0 * fit[0], 1)
+        rows = streams[source]
+        moving = len(rows) and float(np.ptp(rows[:, 1:], axis=0).max()) >= min_span
+        fit = best_lag(rows, streams[follower]) if moving else None
+        if fit is None or fit[0] >= LAGS_S[-1] - 1e-9:
+            result[f"{source}->{follower}"] = None
+        else:
+            result[f"{source}->{follower}"] = round(1000.0 * fit[0], 1)
     return result
 
 

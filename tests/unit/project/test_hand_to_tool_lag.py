@@ -47,3 +47,17 @@ def test_each_stage_and_the_whole_chain():
     assert lags["filtered->target"] == pytest.approx(10, abs=2.1)
     assert lags["commanded->tool"] == pytest.approx(50, abs=2.1)
     assert lags["raw->tool"] == pytest.approx(100, abs=4.1)
+
+
+def test_a_still_hand_or_an_arm_that_does_not_follow_gives_no_lag():
+    rng = np.random.default_rng(3)
+    raw = hand_path(rng)
+    still = raw.copy()
+    still[:, 1:] = 0.001 * still[:, 1:]
+    frozen = delayed(raw, 0.0, rng)
+    frozen[:, 1:] = frozen[0, 1:] + rng.normal(0.0, 0.0002, frozen[:, 1:].shape)
+    streams = {"raw": raw, "filtered": raw, "target": frozen, "commanded": frozen, "tool": frozen}
+    lags = stage_lags(streams)
+    assert lags["raw->filtered"] == 0.0
+    quiet = stage_lags({**streams, "raw": still, "filtered": still})
+    assert quiet["raw->filtered"] is None and quiet["raw->tool"] is None
