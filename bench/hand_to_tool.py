@@ -117,7 +117,6 @@ def record(out_path):
     from motion_common.kinematics import RobotKinematics
     from motion_sensor.msg import hand
 
-    robot = RobotKinematics(os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf"))
     rows = {name: [] for name in ("raw", "filtered", "target", "commanded", "tool")}
     done = []
 
@@ -136,8 +135,8 @@ def record(out_path):
 
         return callback
 
-    def on_command(msg):
-        rows["commanded"].append((msg.header.stamp.to_sec(), *robot.forward(list(msg.position)).translation))
+    def on_command(msg):  # joints now; tool positions once recorded, off the callbacks
+        rows["commanded"].append((msg.header.stamp.to_sec(), *msg.position))
 
     rospy.init_node("hand_to_tool_recorder", disable_signals=True)
     rospy.Subscriber("/motion_sensor/raw_hand", hand, on_hand("raw"), queue_size=1000)
@@ -149,6 +148,8 @@ def record(out_path):
     deadline = time.monotonic() + 300.0
     while not (done and time.monotonic() > done[0] + 1.0) and time.monotonic() < deadline:
         time.sleep(0.05)
+    robot = RobotKinematics(os.path.join(ROOT, "src", "motion_common", "urdf", "ur5e.urdf"))
+    rows["commanded"] = [(row[0], *robot.forward(list(row[1:])).translation) for row in list(rows["commanded"])]
     np.savez(out_path, **{name: np.array(values, dtype=float).reshape(-1, 4) for name, values in rows.items()})
 
 

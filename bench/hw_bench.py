@@ -15,20 +15,28 @@ import sys
 import time
 
 import numpy as np
+import yaml
 
 from bench_common import write_results
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 PORT = 11477  # a master of its own, so a running session is never disturbed
 LAUNCH = os.path.join(ROOT, "src", "motion_bringup", "launch")
-UR_HOME = [0.0, -1.5707963, 1.5707963, -1.5707963, -1.5707963, 0.0]
-HOME = np.array(UR_HOME)
-# Driver -> (launch file and arguments, start pose of its robot: rad).
+# Driver -> (launch file and arguments, the robot that launch file drives by default).
 DRIVERS = {
-    "pybullet": (["hw_sim.launch"], UR_HOME),
-    "simple_message_fake": (["hw_industrial.launch", "fake_controller:=true"], [0.0, 0.4, 1.6, 0.0, 1.14, 0.0]),
-    "ur_rtde_fake": (["hw_ur.launch", "fake_controller:=true"], UR_HOME),
+    "pybullet": (["hw_sim.launch"], "ur5e"),
+    "simple_message_fake": (["hw_industrial.launch", "fake_controller:=true"], "tx90"),
+    "ur_rtde_fake": (["hw_ur.launch", "fake_controller:=true"], "ur5e"),
 }
+
+
+def start_pose(robot):
+    """The robot's shipped start pose (motion_common/config/robots/<robot>.yaml), rad."""
+    with open(os.path.join(ROOT, "src", "motion_common", "config", "robots", f"{robot}.yaml"), encoding="utf-8") as fh:
+        return np.array(yaml.safe_load(fh)["initial_joints"], dtype=float)
+
+
+HOME = start_pose("ur5e")
 
 
 def percentiles(samples_s):
@@ -68,8 +76,8 @@ def sim_real_time_factor(seconds):
 
 def service_benchmarks(calls, stream_seconds, driver="pybullet"):
     """Round trip and 500 Hz streaming through the driver's launch file, started here."""
-    (launch_file, *launch_args), home = DRIVERS[driver]
-    home = np.array(home)
+    (launch_file, *launch_args), robot = DRIVERS[driver]
+    home = start_pose(robot)
     env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}")
     os.environ["ROS_MASTER_URI"] = env["ROS_MASTER_URI"]
     launch = subprocess.Popen(

@@ -206,12 +206,13 @@ def _check_choices(launch_file: str, values: dict, declared: dict) -> list[str]:
         from motion_common.launch_args import suggestion
 
         if ":" in device:
+            from motion_sensor.devices.device_loader import device_class
+            from motion_sensor.errors import MotionSensorError
+
             module_name, _, attribute = device.partition(":")
             try:
-                import importlib
-
-                getattr(importlib.import_module(module_name), attribute)
-            except Exception as exc:  # any import failure of a user's module is reported as is
+                device_class(device)  # what device_node will load
+            except MotionSensorError as exc:
                 errors.append(f"command line device:={device}: cannot load {attribute!r} from {module_name!r}: {exc}")
         else:
             names = _device_names(os.path.dirname(os.path.abspath(launch_file)))
