@@ -248,22 +248,46 @@ class Extrinsics:
     used: list[int] = field(default_factory=list)
     missing: list[tuple[int, str]] = field(default_factory=list)
     partly_hidden: list[int] = field(default_factory=list)
+    object_points: np.ndarray | None = None  # N x 3 m, base frame: the corners solved with
+    image_points: np.ndarray | None = None  # N x 2 px, where they were seen
+    edge_corners: int = 0  # corners of markers at the image border among them
 
 
-def extrinsics_from_marker(image, markers, K, distortion, require_all: bool = False) -> Extrinsics:
+def _inner_corners(image, observation: MarkerObservation, margin_px: float) -> np.ndarray:
+    """Which corners of a marker found at the image border lie ``margin_px`` inside it."""
+    h, w = np.asarray(image).shape[:2]
+    c = observation.corners
+    return (
+        (c[:, 0] >= margin_px)
+        & (c[:, 1] >= margin_px)
+        & (c[:, 0] <= w - 1 - margin_px)
+        & (c[:, 1] <= h - 1 - margin_px)
+    )
+
+
+def extrinsics_from_marker(
+    image, markers, K, distortion, require_all: bool = False, edge_corners: bool = False
+) -> Extrinsics:
     """Camera pose in the robot base frame from one image of the cell's marker(s) (a Marker
     or a list). Every visible marker's four corners, in base coordinates from the cell
     YAML, go into one ``cv2.solvePnP``: one marker with SOLVEPNP_IPPE_SQUARE, several with
     SOLVEPNP_IPPE (coplanar points) refined by Levenberg-Marquardt. With ``require_all`` a
-    missing or partly hidden marker refuses the calibration."""
+    missing or partly hidden marker refuses the calibration. With ``edge_corners`` a
+    marker found at the image border still gives its corners that lie inside the image
+    (they join the other markers' corners; alone, fewer than four corners fix nothing)."""
     markers = [markers] if isinstance(markers, Marker) else list(markers)
     objects, pixels, used, missing, hidden, single = [], [], [], [], [], None
+    edge_objects, edge_pixels = [], []
     for marker in markers:
         observation = observe_marker(image, marker, K, distortion)
         if not observation.ok:
             missing.append((marker.id, observation.reason))
             if observation.partly_outside:
                 hidden.append(marker.id)
+                if edge_corners and observation.corners is not None:
+                    inside = _inner_corners(image, observation, 3.0)
+                    edge_objects.append(marker.corners()[inside])
+                    edge_pixels.append(observation.corners[inside])
             continue
         objects.append(marker.corners())
         pixels.append(observation.corners)
@@ -272,8 +296,9 @@ def extrinsics_from_marker(image, markers, K, distortion, require_all: bool = Fa
     if not used or (require_all and missing):
         reason = "; ".join(f"marker {i}: {why}" for i, why in missing)
         return Extrinsics(False, reason, missing=missing, partly_hidden=hidden)
-    objects, pixels = np.vstack(objects), np.vstack(pixels)
-    if len(used) == 1:
+    edge_count = int(sum(len(e) for e in edge_objects))
+    objects, pixels = np.vstack(objects + edge_objects), np.vstack(pixels + edge_pixels)
+    if len(used) == 1 and not edge_count:
         marker, observation = single
         T_cam_base = observation.T_cam_marker @ np.linalg.inv(marker.pose)
     else:
@@ -287,7 +312,7 @@ def extrinsics_from_marker(image, markers, K, distortion, require_all: bool = Fa
     rvec, _ = cv2.Rodrigues(T_cam_base[:3, :3])
     projected, _ = cv2.projectPoints(objects, rvec, T_cam_base[:3, 3], K, distortion)
     error = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - pixels) ** 2, axis=1))))
-    return Extrinsics(True, "", np.linalg.inv(T_cam_base), error, used, missing, hidden)
+    return Extrinsics(True, "", np.linalg.inv(T_cam_base), error, used, missing, hidden, objects, pixels, edge_count)
 
 
 def pose_error(T_estimate, T_true) -> tuple[float, float]:

@@ -1,17 +1,25 @@
 """One camera image in, the parts on the belt out (what the vision node runs per image).
 
-1. Registration: the camera pose in the robot base frame from the cell's ArUco markers
-   (``calibration.extrinsics_from_marker``, every marker required), averaged over the last
-   ``registration_window`` images (per-image PnP noise is ~0.6 mm / 0.09°). A registration
-   that differs from the average by more than ``moved_mm`` / ``moved_deg`` means the camera
-   was moved: the average restarts from it (re-registration, no restart needed).
-2. A frame whose markers are missing or partly hidden keeps the last registration if it is
-   younger than ``registration_max_age`` s, and is counted; with no registration at all,
-   no part is published (nothing is picked from an unregistered camera).
-3. Detection (classical colour + shape, or an ONNX model) and the exact ray-plane
+1. Registration: the camera pose in the robot base frame from whatever cell ArUco markers
+   the image shows (``calibration.extrinsics_from_marker``; a marker at the image border
+   gives the corners that lie inside it), averaged over the last ``registration_window``
+   full registrations (per-image PnP noise is ~0.6 mm / 0.09°). A registration that
+   differs from the average by more than ``moved_mm`` / ``moved_deg`` means the camera was
+   moved: the average restarts from it (re-registration, no restart needed).
+2. Fewer markers than the cell has (one hidden, cut by the border): the pose prior (the
+   last good registration, else the calibrated pose given as ``prior_pose``) is checked
+   against them. When it reprojects their corners within ``prior_agreement_px`` it is
+   confirmed and held (its age restarts); otherwise the camera moved, and the pose is
+   solved from the seen corners starting at the prior (Levenberg-Marquardt: one marker's
+   weak tilt is pulled towards the prior instead of a mirror solution).
+3. A frame with no usable marker keeps the last registration while it is younger than
+   ``registration_max_age`` s, and is counted; with no registration at all, or an older
+   one, no part is published (nothing is picked from an unregistered camera).
+4. Detection (classical colour + shape, or an ONNX model) and the exact ray-plane
    intersection (``kitting.vision.BeltVision``).
 
-Every rejected image or object is counted by reason (``counts``) and kept in the result.
+Every rejected image or object is counted by reason (``counts``) and kept in the result;
+``registration`` says how the current image was registered.
 """
 
 import math
@@ -47,6 +55,14 @@ VISION_SCHEMA = ParamSchema(
         Param("moved_mm", 3.0, "mm", "registration change that means the camera moved", low=0.1, high=1000.0),
         Param("moved_deg", 0.5, "deg", "rotation change that means the camera moved", low=0.01, high=180.0),
         Param("max_reprojection_px", 2.0, "px", "largest marker reprojection error accepted", low=0.01, high=100.0),
+        Param(
+            "prior_agreement_px",
+            2.0,
+            "px",
+            "largest RMS reprojection of the seen markers under the held registration that confirms it",
+            low=0.01,
+            high=100.0,
+        ),
         Param("belt_edge_margin", 0.0, "m", "strip along the belt's edges treated as 'edge'", low=0.0, high=0.2),
     ],
     ignore=("detector_params",),
@@ -62,6 +78,7 @@ class VisionResult:
     parts: list[PartObservation] = field(default_factory=list)
     rejections: list[Rejection] = field(default_factory=list)
     camera_pose: np.ndarray | None = None
+    registration: str = ""  # full | confirmed | partial | held | none
 
 
 class VisionPipeline:
@@ -78,6 +95,7 @@ class VisionPipeline:
         params: dict | None = None,
         detector_params: dict | None = None,
         source: str = "vision parameters",
+        prior_pose=None,
     ):
         self.params = VISION_SCHEMA.validate(params or {}, source)
         self.cell = cell
@@ -99,19 +117,70 @@ class VisionPipeline:
         self._registrations = deque(maxlen=self.params["registration_window"])
         self.registration_time: float | None = None
         self.camera_pose: np.ndarray | None = None
+        # The calibrated pose (4x4, base frame), only a starting point for a partial view.
+        self.prior_pose = None if prior_pose is None else np.asarray(prior_pose, float)
+        self.registration = "none"
         self.counts = Counter()
 
     # -- registration ------------------------------------------------------------------------
     def _register(self, image, stamp: float) -> str:
         """Update the camera pose from the markers; '' or why this image gave none."""
         found = extrinsics_from_marker(
-            image, self.cell.markers, self.camera.K, self.camera.distortion, require_all=True
+            image, self.cell.markers, self.camera.K, self.camera.distortion, edge_corners=True
         )
         if not found.ok:
             return "marker partly hidden" if found.partly_hidden else "no marker"
         if found.reprojection_px > self.params["max_reprojection_px"]:
             return f"marker reprojection {found.reprojection_px:.2f} px too large"
-        pose = found.T_base_cam
+        if found.missing:
+            return self._register_partial(found, stamp)
+        self.counts["registered: every marker"] += 1
+        self.registration = "full"
+        self._add_registration(found.T_base_cam, stamp)
+        return ""
+
+    def _register_partial(self, found, stamp: float) -> str:
+        """Some markers seen: confirm the prior, or solve from them starting at the prior."""
+        prior = self.camera_pose if self.camera_pose is not None else self.prior_pose
+        seen = ", ".join(str(i) for i in found.used) or "edge corners"
+        if prior is None:
+            pose = found.T_base_cam
+        else:
+            if self.camera_pose is not None and self._reprojection(prior, found) <= self.params["prior_agreement_px"]:
+                # The markers seen are where the held registration puts them: it still holds.
+                self.counts["registration confirmed by part of the markers"] += 1
+                self.registration = "confirmed"
+                self.registration_time = stamp
+                return ""
+            pose = self._refine_from(prior, found)
+        if self._reprojection(pose, found) > self.params["max_reprojection_px"]:
+            return f"marker(s) {seen}: no pose near the prior explains them"
+        self.counts["registered: part of the markers"] += 1
+        self.registration = "partial"
+        self._add_registration(pose, stamp)
+        return ""
+
+    def _reprojection(self, T_base_cam, found) -> float:
+        T_cam_base = np.linalg.inv(T_base_cam)
+        rvec, _ = cv2.Rodrigues(T_cam_base[:3, :3])
+        projected, _ = cv2.projectPoints(
+            found.object_points, rvec, T_cam_base[:3, 3], self.camera.K, self.camera.distortion
+        )
+        return float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - found.image_points) ** 2, axis=1))))
+
+    def _refine_from(self, T_base_cam, found) -> np.ndarray:
+        T_cam_base = np.linalg.inv(T_base_cam)
+        rvec, _ = cv2.Rodrigues(T_cam_base[:3, :3])
+        tvec = T_cam_base[:3, 3].reshape(3, 1).copy()
+        rvec, tvec = cv2.solvePnPRefineLM(
+            found.object_points, found.image_points, self.camera.K, self.camera.distortion, rvec, tvec
+        )
+        refined = np.eye(4)
+        refined[:3, :3], _ = cv2.Rodrigues(rvec)
+        refined[:3, 3] = np.ravel(tvec)
+        return np.linalg.inv(refined)
+
+    def _add_registration(self, pose, stamp: float):
         if self._registrations:
             mean = self._mean_pose()
             moved_mm = 1000.0 * np.linalg.norm(pose[:3, 3] - mean[:3, 3])
@@ -124,7 +193,6 @@ class VisionPipeline:
         self._registrations.append(pose)
         self.registration_time = stamp
         self._set_pose(self._mean_pose())
-        return ""
 
     def _mean_pose(self) -> np.ndarray:
         poses = list(self._registrations)
@@ -154,17 +222,20 @@ class VisionPipeline:
         why = self._register(cv2.cvtColor(image_rgb, cv2.COLOR_RGB2GRAY), stamp)
         if why:
             self.counts[why] += 1
+            self.registration = "held"
             age = math.inf if self.registration_time is None else stamp - self.registration_time
             if age > self.params["registration_max_age"]:
+                self.registration = "none"
                 self.counts["no registration: parts not published"] += 1
                 return VisionResult(
                     False,
                     f"{why}; no camera registration younger than "
                     f"{self.params['registration_max_age']:g} s: check the markers are visible",
+                    registration="none",
                 )
         observations, detected = self._vision.observe(image_rgb)
         detected: DetectionResult
         for rejection in detected.rejections:
             self.counts[rejection.reason] += 1
         self.counts["parts"] += len(observations)
-        return VisionResult(True, why, observations, detected.rejections, self.camera_pose)
+        return VisionResult(True, why, observations, detected.rejections, self.camera_pose, self.registration)
