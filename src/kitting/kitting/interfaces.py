@@ -18,6 +18,12 @@ _EVENTS = Topic("kitting/events", "kitting/KittingEvent", "picks, places, misses
 _READY = Topic("kitting/ready", "std_msgs/Bool", "the cell is registered and ready", latched=True)
 _STATE = Topic("kitting_cell/state", "kitting/CellState", "the simulated cell's state")
 _TRUTH = Topic("kitting_cell/ground_truth", "kitting/CellState", "the simulated parts' true poses")
+_PART_PRESENT = Topic(
+    "kitting/gripper/part_present",
+    "std_msgs/Bool",
+    "the gripper's part sensor (the simulated magnet's: a part is held); the evidence for a pick the camera "
+    "could not confirm",
+)
 _STOP_LATCHED = Topic("motion_controller/stop_latched", "std_msgs/Bool", "the server's latched stop")
 
 _CELL_SIM_PARAMS = ParamSchema(
@@ -51,7 +57,7 @@ KITTING_CELL_SIM = NodeInterface(
     "The simulated cell: belt, parts, tray and camera (rendered in its own process), mirroring the arm's tool "
     "and gripper.",
     _CELL_SIM_PARAMS,
-    publishes=(_IMAGE, _INFO, _STATE, _TRUTH),
+    publishes=(_IMAGE, _INFO, _STATE, _TRUTH, _PART_PRESENT),
     subscribes=(
         Topic("motion_controller/tool_pose", "geometry_msgs/PoseStamped", "the arm's tool"),
         Topic("motion_controller/gripper", "std_msgs/Bool", "the arm's gripper"),
@@ -134,7 +140,11 @@ KITTING_NODE = NodeInterface(
         ]
     ),
     publishes=(_EVENTS, _READY),
-    subscribes=(_STOP_LATCHED, _PARTS),
+    subscribes=(
+        _STOP_LATCHED,
+        _PARTS,
+        Topic(_PART_PRESENT.name, _PART_PRESENT.type, _PART_PRESENT.doc, optional=True),
+    ),
     calls=(Service("motion_controller", "motion_commander/commander", "the hardware interface"),),
 )
 

@@ -15,6 +15,18 @@ One pick (all heights are of the magnet face, ``cell.gripper.tcp_length`` below 
    missed; it is retried while it is reachable, otherwise logged with the reason;
 5. carry (MoveL at ``transit_height``), lower into the slot, magnet off, lift.
 
+Evidence, never a silent success:
+
+- a part is never picked on a pose older than ``max_pose_age`` s (its newest sighting):
+  such a track waits for fresh sightings, and a descent about to start on one is deferred;
+- a pick the camera could not confirm after the lift (no image) is checked again above
+  the slot, before the release: by the images that came in meanwhile (late ones count),
+  else by the gripper's part sensor (``part_present``: True, False or None when it has no
+  reading). With neither, or with evidence against, the part is reported ``failed``, not
+  ``placed``;
+- after the release, a part still on the magnet (part sensor) or seen on the belt after
+  the lift is reported ``failed``.
+
 Every path is checked before it is sent: no point of the tool's magnet may come closer
 than ``clearance`` to the belt or the tray except the grasp and release points themselves
 (``check_segment``). The descent duration is learned from the measured moves.
@@ -87,6 +99,16 @@ PICKER_SCHEMA = ParamSchema(
             "time after the lift in which a fresh sighting means a missed pick",
             low=0.0,
             high=10.0,
+        ),
+        Param(
+            "max_pose_age",
+            3.0,
+            "s",
+            "oldest sighting of a part a descent may start on (older: wait for fresh sightings); "
+            "the arm hovering over a part may hide it for a second or two, and a 1 % belt speed error "
+            "moves the prediction 1.5 mm in 3 s at 0.05 m/s",
+            low=0.05,
+            high=30.0,
         ),
         Param(
             "clearance",
@@ -187,6 +209,11 @@ class PickAborted(Exception):
         self.reason, self.result = reason, result
 
 
+class PickDeferred(PickAborted):
+    """The part's pose is too old to descend on: nothing was touched, the magnet goes off and
+    the part is tried again once it is seen afresh (while it is reachable)."""
+
+
 class PickMissed(PickAborted):
     """The grasp missed the part (the arm reached the hover point too late, or the part is
     still on the belt after the lift): the pick is retried while the part is reachable, and
@@ -212,6 +239,7 @@ class KittingPicker:
         sleep: Callable[[float], None] = time.sleep,
         on_event: Callable[[KittingEvent], None] = lambda event: None,
         source: str = "kitting parameters",
+        part_present: Callable[[], bool | None] = lambda: None,
     ):
         self.params = PICKER_SCHEMA.validate(params or {}, source)
         if self.params["pick_window"][1] <= self.params["pick_window"][0]:
@@ -219,6 +247,7 @@ class KittingPicker:
         self.cell, self.controller = cell, controller
         self.tracker = BeltTracker(dict(tracker_params or {}, initial_speed=cell.belt.speed))
         self.clock, self.sleep, self.on_event = clock, sleep, on_event
+        self.part_present = part_present  # the gripper's part sensor: True, False, None (no reading)
         self.obstacles = cell_obstacles(cell)
         self.descent_time = self.params["descent_time"]
         self.records: dict[int, _PartRecord] = {}
@@ -273,11 +302,14 @@ class KittingPicker:
     # -- the cycle ---------------------------------------------------------------------------
     def candidates(self) -> list[Track]:
         """Confirmed tracks not done yet, nearest to leaving the pick window first."""
+        oldest = self.clock() - self.params["max_pose_age"]
         with self.lock:
             out = [
                 copy.deepcopy(t)
                 for t in self.tracker.tracks.values()
-                if t.hits >= self.params["min_hits"] and not self.records.get(t.track_id, _PartRecord()).done
+                if t.hits >= self.params["min_hits"]
+                and t.last_seen >= oldest
+                and not self.records.get(t.track_id, _PartRecord()).done
             ]
         return sorted(out, key=lambda t: -t.position[0])
 
@@ -323,7 +355,8 @@ class KittingPicker:
                 # Nothing held; after a suspected miss the magnet stays on instead (if
                 # the part is held after all, it is never dropped onto the belt).
                 self._release_quietly()
-            if exc.result or record.attempts >= self.params["max_attempts"] or not isinstance(exc, PickMissed):
+            retry = isinstance(exc, (PickMissed, PickDeferred))
+            if exc.result or record.attempts >= self.params["max_attempts"] or not retry:
                 record.done = exc.result == 0 or self.holding is not None
                 return self._emit(track, "failed", exc.reason)
             return self._emit(track, "missed", exc.reason)
@@ -379,6 +412,13 @@ class KittingPicker:
             raise PickMissed("missed: the arm reached the hover point too late for this intercept")
         if wait > 0:
             self.sleep(wait)
+        with self.lock:
+            latest = self.tracker.tracks.get(track.track_id, latest)
+        age = self.clock() - latest.last_seen
+        if age > P["max_pose_age"]:
+            raise PickDeferred(
+                f"deferred: the part was last seen {age:.2f} s ago (max_pose_age {P['max_pose_age']:g} s)"
+            )
         began = self.clock()
         self._move_l(grasp, allowed_end=P["hover_height"] + 0.01, check_from=hover)
         took = self.clock() - began
@@ -400,7 +440,7 @@ class KittingPicker:
                 raise PickMissed("missed: the part is still on the belt after the lift")
         self.holding = track
         self._emit(track, "picked", unverified, grasp, verified=not unverified)
-        return self.place_held()
+        return self.place_held(check=(latest, lifted_at) if unverified else None, seen=(latest, lifted_at))
 
     def _image_since(self, since: float) -> bool:
         """Has an image taken after ``since`` been processed (with or without parts)?"""
@@ -415,8 +455,11 @@ class KittingPicker:
             recent = [(t, o) for t, o in self.recent if t > since and o.class_name == class_name]
         return any(math.hypot(o.x - p[0], o.y - p[1]) < radius for t, o in recent for p in [track.predict_position(t)])
 
-    def place_held(self) -> KittingEvent:
-        """Carry the held part to its class's slot and release it there."""
+    def place_held(self, check=None, seen=None) -> KittingEvent:
+        """Carry the held part to its class's slot and release it there. ``check`` (track,
+        lift time) for a pick the camera could not confirm: the evidence is looked at again
+        above the slot, before the release. ``seen`` (track, lift time): after the release,
+        a sighting on the belt since the lift means the part never came."""
         P = self.params
         track = self.holding
         slot = self.cell.tray.slot_for(track.class_name)
@@ -425,11 +468,32 @@ class KittingPicker:
         above = np.r_[slot.center[:2], self.cell.belt.height + P["transit_height"]]
         release = np.r_[slot.center[:2], floor + P["place_height"] + part.height]
         self._rise_then_move(above)
+        held, evidence = self._pick_evidence(*check) if check is not None else (True, "")
         self._move_l(release)
         self._gripper(False)
         self.holding = None
         self._move_l(above)
-        return self._emit(track, "placed", f"slot {slot.part_class}", release)
+        problem = "" if held else evidence
+        if not problem and self.part_present() is True:
+            problem = "the part is still on the magnet after the release"
+        if not problem and seen is not None and self._still_on_belt(seen[0], track.class_name, seen[1]):
+            problem = "the part was seen on the belt after the lift: it never came to the slot"
+        if problem:
+            return self._emit(track, "failed", f"not placed: {problem}", release, verified=False)
+        return self._emit(track, "placed", f"slot {slot.part_class}" + (f" ({evidence})" if evidence else ""), release)
+
+    def _pick_evidence(self, track: Track, lifted_at: float) -> tuple[bool, str]:
+        """Above the slot: (is the unconfirmed part on the magnet, by what evidence / why not)."""
+        if self._image_since(lifted_at):
+            if self._still_on_belt(track, track.class_name, lifted_at):
+                return False, "the part is still on the belt: the pick missed"
+            return True, "confirmed by the camera before the release"
+        present = self.part_present()
+        if present is True:
+            return True, "confirmed by the gripper's part sensor"
+        if present is False:
+            return False, "the gripper's part sensor reads no part"
+        return False, "no camera image since the lift and no gripper part sensor reading: no evidence the part is held"
 
     def go_to_wait(self):
         """Tool to the wait position (MoveL at transit height first)."""

@@ -9,6 +9,7 @@ end. A track is confirmed after ``min_hits`` hits; its class is the majority of 
 observations' classes.
 """
 
+import math
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -47,6 +48,7 @@ class Track:
     track_id: int
     kf: KalmanFilter
     t: float  # s, time of the state
+    last_seen: float = -math.inf  # s, stamp of the newest observation in the track
     hits: int = 1
     misses: int = 0
     classes: Counter = field(default_factory=Counter)
@@ -127,6 +129,7 @@ class BeltTracker:
             track, obs = self.tracks[track_id], observations[index]
             track.kf.update(np.array([[obs.x], [obs.y]]))
             track.hits += 1
+            track.last_seen = t
             track.misses = 0
             track.classes[obs.class_name] += 1
             track.confirmed = track.confirmed or track.hits >= P["min_hits"]
@@ -137,7 +140,7 @@ class BeltTracker:
                 self.stopped.append(self.tracks.pop(track_id))
         for index, obs in enumerate(observations):
             if index not in matched_obs:
-                track = Track(self._next_id, self._new_filter(obs), t, classes=Counter({obs.class_name: 1}))
+                track = Track(self._next_id, self._new_filter(obs), t, t, classes=Counter({obs.class_name: 1}))
                 track.confirmed = P["min_hits"] <= 1
                 self.tracks[track.track_id] = track
                 self._next_id += 1
