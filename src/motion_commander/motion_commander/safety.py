@@ -132,6 +132,49 @@ class JointStepLimiter:
                 ratio = step / max_step
         return ratio
 
+    def fraction_within(self, previous, start, goal, dt: float, speed_fraction: float = 1.0):
+        """Largest f in [0, 1] for which the step from ``previous`` to start + f (goal - start)
+        keeps every joint within its speed limit and, on the goal's side, able to stop at the
+        goal (or no further than ``start`` already goes); None when ``start`` itself (f = 0)
+        is beyond the speed limit.
+
+        ``start`` is a step that must be taken whole (the tool position): it may move joints
+        away from the goal or past it, which is fine as long as it is within the speed limit.
+        The rest of the way toward ``goal`` (the orientation) gets what the limits leave.
+        Each joint's step a + f b must lie between bounds down and up: linear in f, solved
+        joint by joint, the smallest winning."""
+        previous, start, goal = float_list(previous), float_list(start), float_list(goal)
+        dt = self._clamped_dt(dt)
+        scale = dt * max(speed_fraction, 0.0)
+        brakes = self._max_steps(previous, goal, dt, speed_fraction)
+        fraction = 1.0
+        for i, (p, s, g) in enumerate(zip(previous, start, goal)):
+            speed_step = self._max_velocity[i] * scale
+            a, b = s - p, g - s
+            if abs(a) > speed_step * (1.0 + 1e-9):
+                return None
+            up = down = speed_step
+            toward = g - p
+            if toward > 0.0:
+                up = max(brakes[i], a)
+            elif toward < 0.0:
+                down = max(brakes[i], -a)
+            if b > 0.0:
+                fraction = min(fraction, (up - a) / b)
+            elif b < 0.0:
+                fraction = min(fraction, (-down - a) / b)
+        return max(fraction, 0.0)
+
+    def speed_ratio(self, previous, target, dt: float, speed_fraction: float = 1.0) -> float:
+        """How many times too large the step to ``target`` is for the speed limit alone."""
+        scale = self._clamped_dt(dt) * max(speed_fraction, 0.0)
+        ratio = 0.0
+        for p, t, limit in zip(float_list(previous), float_list(target), self._max_velocity):
+            step = abs(t - p)
+            if step > 0.0:
+                ratio = max(ratio, step / (limit * scale) if scale > 0.0 else float("inf"))
+        return ratio
+
     def limit(self, previous, target, dt: float, speed_fraction: float = 1.0, goal=None, ratio=None):
         """Return (command, limited): previous moved toward target within the limits.
 

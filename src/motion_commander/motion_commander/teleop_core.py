@@ -339,22 +339,68 @@ class TeleopCore:
             self._command_pose = self.kinematics.forward_pose(self._command)
         return self._command_pose
 
-    def _partial_step(self, target_position, target_rotation, fraction, goal):
-        """Joints reaching ``fraction`` of the way from the commanded tool pose to the target
-        (whose IK solution is ``goal``, also the fallback when this IK fails)."""
+    def _partial_step(self, target_position, target_rotation, position_fraction, rotation_fraction, seed):
+        """Joints reaching ``position_fraction`` of the way from the commanded tool position to
+        the target's and ``rotation_fraction`` of the way from the commanded orientation to the
+        target's, solved from ``seed``; None when this IK fails."""
         start_position, start_orientation = self._pose_at_command()
         # Plain floats and pinocchio's own quaternion: fewer numpy calls on the frame's
         # latency. The target goes in as coefficients: pinocchio's matrix constructor of a
         # quaternion leaks memory on every call.
-        target = pin.Quaternion(matrix_to_quaternion(target_rotation))
-        rotation = pin.Quaternion(start_orientation).slerp(fraction, target).matrix()
-        position = np.array([s + fraction * (t - s) for s, t in zip(start_position.tolist(), target_position.tolist())])
+        if rotation_fraction <= 0.0:
+            rotation = pin.Quaternion(start_orientation).matrix()
+        else:
+            target = pin.Quaternion(matrix_to_quaternion(target_rotation))
+            rotation = pin.Quaternion(start_orientation).slerp(rotation_fraction, target).matrix()
+        position = np.array(
+            [s + position_fraction * (t - s) for s, t in zip(start_position.tolist(), target_position.tolist())]
+        )
+        result = self.kinematics.solve_ik(pin.SE3(rotation, position), seed)
+        return self.margin.apply(result.joints)[0] if result.success else None
+
+    def _blend(self, fraction, goal):
+        """The joints ``fraction`` of the way from the command to ``goal``, as a float list."""
+        return [c + fraction * (g - c) for c, g in zip(self._command.tolist(), goal.tolist())]
+
+    def _limited_step(self, target_position, target_rotation, overshoot, goal, dt, speed):
+        """(joints, stop, ratio) for a frame whose IK target ``goal`` is ``overshoot`` (> 1)
+        times too far for one step: the tool position first, the orientation with what speed
+        is left. ``stop`` and ``ratio`` are what JointStepLimiter.limit() takes as its goal
+        and ratio (None: computed there).
+
+        A real hand's orientation is noisy and its rotations are quick, so the wrist joints
+        ask for several times their speed limit where the position needs a fraction of it.
+        Scaling the whole step by one factor would then make the tool's position trail the
+        hand by the wrist's backlog (tens of ms). Instead the step reaches the target
+        position with the commanded orientation, plus the largest part of the orientation
+        change the limits still allow. When the position alone is too far for one step, the
+        tool moves 1/overshoot of the way along the Cartesian path (position and orientation
+        alike) rather than cutting straight through joint space, which can swing the tool
+        far off the path when the IK solution moved a lot.
+        """
+        limiter = self.limiter
+        held = self._partial_step(target_position, target_rotation, 1.0, 0.0, np.array(self._blend(0.0, goal)))
+        fraction = None if held is None else limiter.fraction_within(self._command, held, goal, dt, speed)
+        if fraction is not None:
+            joints = held
+            if fraction > 0.0:
+                seed = np.array([h + fraction * (g - h) for h, g in zip(held.tolist(), goal.tolist())])
+                solved = self._partial_step(target_position, target_rotation, 1.0, fraction, seed)
+                joints = held if solved is None else solved
+            # Checked for speed alone (and acceleration by limit()): the braking at the goal
+            # is already in the fraction, and the position step may run past the goal.
+            return joints, joints, limiter.speed_ratio(self._command, joints, dt, speed)
+        if held is not None:
+            # The position alone is beyond the speed limit: the position step, scaled down.
+            return held, held, limiter.speed_ratio(self._command, held, dt, speed)
+        fraction = 1.0 / overshoot
         # Seeded the same fraction of the way in joint space: for the small steps of a
         # stream that point already lies within the IK's tolerance of the Cartesian one
         # (the solve then ends at its first check), and otherwise it is the closer start.
-        seed = np.array([c + fraction * (g - c) for c, g in zip(self._command.tolist(), goal.tolist())])
-        result = self.kinematics.solve_ik(pin.SE3(rotation, position), seed)
-        return self.margin.apply(result.joints)[0] if result.success else goal
+        joints = self._partial_step(
+            target_position, target_rotation, fraction, fraction, np.array(self._blend(fraction, goal))
+        )
+        return (goal if joints is None else joints), goal, None
 
     def _command_for(self, stamp, now, position, orientation) -> TeleopCommand | None:
         flags = []
@@ -396,11 +442,9 @@ class TeleopCore:
         overshoot = self.limiter.overshoot(self._command, joints, dt, speed)
         partial = 1.0 < overshoot < float("inf")
         if partial:
-            # Too far for one step: aim at the point 1/overshoot of the way along the
-            # Cartesian path instead of cutting straight through joint space, which can
-            # swing the tool far off the path when the IK solution moved a lot.
-            joints = self._partial_step(target_position, target_rotation, 1.0 / overshoot, joints)
-            joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal)
+            joints, stop, ratio = self._limited_step(target_position, target_rotation, overshoot, goal, dt, speed)
+            joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=stop, ratio=ratio)
+            limited = True  # the step is short of the target either way
         else:  # the step to the IK target itself: its overshoot is known
             joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal, ratio=overshoot)
         if limited and not flags:
