@@ -37,6 +37,9 @@ import numpy as np
 
 from bench_common import RESULTS, write_results
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src", "motion_commander"))
+from motion_commander.lag_estimate import LAGS_S, MIN_SPAN_M, best_lag, trailing_lag  # noqa: E402, F401
+
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 SHARED = os.path.abspath(os.path.join(ROOT, "..", "shared", "data", "leap_v6"))
 # Slow and fast hands, one and two hands in view, several frame rates.
@@ -48,8 +51,6 @@ FILTERS = {
     "kalman": ["filter:=kalman"],
 }
 PORT = 11481
-LAGS_S = np.arange(0.0, 0.3001, 0.002)
-MIN_SPAN_M = 0.02  # a stage's input must move at least this far (any axis) for its lag to count
 STAGES = [("raw", "filtered"), ("filtered", "target"), ("target", "commanded"), ("commanded", "tool"), ("raw", "tool")]
 
 
@@ -61,27 +62,6 @@ def recording_path(name):
     raise SystemExit(f"hand_to_tool: no recording {name!r} in {SHARED} or tests/data")
 
 
-def best_lag(source, follower, lags=LAGS_S):
-    """(lag s, residual rms m) of the affine map follower(t) ~ A source(t - lag) + b.
-
-    ``source`` and ``follower`` are arrays of rows (t, values...); the follower's samples
-    count only where the delayed source is defined. None when too few samples overlap."""
-    best = None
-    for lag in lags:
-        t = follower[:, 0] - lag
-        inside = (t >= source[0, 0]) & (t <= source[-1, 0])
-        if inside.sum() < 20:
-            continue
-        x = np.column_stack([np.interp(t[inside], source[:, 0], source[:, k]) for k in range(1, source.shape[1])])
-        y = follower[inside, 1:]
-        design = np.column_stack([x, np.ones(len(x))])
-        coef, *_ = np.linalg.lstsq(design, y, rcond=None)
-        rms = float(np.sqrt(np.mean((design @ coef - y) ** 2)))
-        if best is None or rms < best[1]:
-            best = (float(lag), rms)
-    return best
-
-
 def engaged_span(streams):
     """The part of every stream inside the span of the core's targets (engaged)."""
     target = streams["target"]
@@ -90,21 +70,13 @@ def engaged_span(streams):
 
 
 def stage_lags(streams, min_span=MIN_SPAN_M):
-    """Lag (ms) of each stage and end to end; None where it cannot be told: a stage whose
-    input moves less than ``min_span`` (a still hand fits any lag) or whose best fit lies
-    at the end of the search (the output does not follow the input within it, e.g. the arm
-    held at a joint limit)."""
+    """Lag (ms) of each stage and end to end (lag_estimate.trailing_lag: None where it
+    cannot be told)."""
     streams = engaged_span(streams)
-    result = {}
-    for source, follower in STAGES:
-        rows = streams[source]
-        moving = len(rows) and float(np.ptp(rows[:, 1:], axis=0).max()) >= min_span
-        fit = best_lag(rows, streams[follower]) if moving else None
-        if fit is None or fit[0] >= LAGS_S[-1] - 1e-9:
-            result[f"{source}->{follower}"] = None
-        else:
-            result[f"{source}->{follower}"] = round(1000.0 * fit[0], 1)
-    return result
+    return {
+        f"{source}->{follower}": trailing_lag(streams[source], streams[follower], min_span)
+        for source, follower in STAGES
+    }
 
 
 def record(out_path):

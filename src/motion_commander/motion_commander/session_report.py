@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .lag_estimate import trailing_lag
 from .latency_stats import LatencyStats
 
 #: Samples of each path a monitor keeps (about 3 minutes of a 110 Hz stream, ~13 MB in all):
@@ -139,6 +140,19 @@ def raw_hand_targets(targets: np.ndarray, hands: np.ndarray, raw_hands: np.ndarr
     return np.column_stack([raw[:, 0], mapped])
 
 
+def hand_to_tool_ms(targets: np.ndarray, raw_hands: np.ndarray, tools: np.ndarray):
+    """How far (ms) the measured tool trails the raw hand while engaged (the span of the
+    targets): the delay of the affine map that best explains the tool path from the delayed
+    hand path (lag_estimate). None when it cannot be told (a still hand, too few samples, or
+    a tool that does not follow within 300 ms)."""
+    if len(targets) < 2 or len(raw_hands) < 2 or len(tools) < 2:
+        return None
+    start, end = targets[0, 0], targets[-1, 0]
+    hands = raw_hands[(raw_hands[:, 0] >= start) & (raw_hands[:, 0] <= end)]
+    tools = tools[(tools[:, 0] >= start) & (tools[:, 0] <= end)]
+    return trailing_lag(hands, tools)
+
+
 def final_error(targets: np.ndarray, tools: np.ndarray) -> float:
     """Distance (m) between the last target and the last tool sample (settled error)."""
     if len(targets) == 0 or len(tools) == 0:
@@ -178,6 +192,7 @@ def summarize(data: SessionData) -> dict:
         "tracking_error_max_mm": round(float(errors.max()), 3) if len(errors) else None,
         "final_error_mm": round(settled * 1000.0, 3) if np.isfinite(settled) else None,
         "overshoot_mm": round(overshoot(targets, tools) * 1000.0, 3),
+        "hand_to_tool_ms": hand_to_tool_ms(targets, np.asarray(data.raw_hands, dtype=float).reshape(-1, 4), tools),
         "raw_tracking_error_rms_mm": round(float(np.sqrt(np.mean(raw_errors**2))), 3) if len(raw_errors) else None,
         "raw_tracking_error_p95_mm": pct(raw_errors, 95),
         "latency_p50_ms": ms(data.latencies, 50),
@@ -234,6 +249,7 @@ def format_summary(summary: dict, plot_path: str = "") -> str:
         f"tracking vs raw hand rms / p95 : {show(summary.get('raw_tracking_error_rms_mm'), 'mm')} / "
         f"{show(summary.get('raw_tracking_error_p95_mm'), 'mm')}",
         f"overshoot at reversals   : {show(summary.get('overshoot_mm'), 'mm')}",
+        f"hand to tool (delay)     : {show(summary.get('hand_to_tool_ms'), 'ms')}",
         f"final error (settled)    : {show(summary['final_error_mm'], 'mm')}",
         f"latency sensor->driver p50 / p99 : {show(summary['latency_p50_ms'], 'ms')} / "
         f"{show(summary['latency_p99_ms'], 'ms')} ({summary['latency_samples']} commands)",
