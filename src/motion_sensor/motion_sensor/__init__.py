@@ -8,7 +8,10 @@ Its subpackages and modules, by role:
   edges; Leap v6, SpaceMouse, replay, depth camera and Kinect, webcam with MediaPipe);
 - ``sequencing``: ``filters`` (pose filters) and ``sequencer`` (irregular device frames
   in, a clean pose stream out);
-- ``gestures``: static poses and dynamic (DTW) gestures, and the recognizer the node runs;
+- ``gestures``: static poses, dynamic (DTW) gestures, the recognizer the node runs, and
+  the hand-skeleton gesture network;
+- ``skeleton_joints``: the one canonical 22-joint hand skeleton and the mapping of Leap
+  bones, MediaPipe landmarks and SHREC'17 joints onto it;
 - ``registration``: hand space to robot space by DTW-aligned paths;
 - ``testing``: test doubles (``synthetic_depth``: ray-cast depth images of a hand), for
   tests and benchmarks only;
@@ -102,6 +105,8 @@ _PUBLIC = {
     "load_dataset": "gestures.gesture_templates",
     "GestureRecognizer": "gestures.gesture_recognizer",
     "load_classifier": "gestures.gesture_recognizer",
+    "JOINT_NAMES": "skeleton_joints",
+    "SkeletonClassifier": "gestures.skeleton_classifier",
     # ROS edges
     "DeviceNode": "devices.device_node",
     "run_device_node": "devices.device_node",

@@ -1,4 +1,5 @@
-"""Gesture recognition on hand frames: static poses and dynamic (DTW) gestures.
+"""Gesture recognition on hand frames: static poses, dynamic (DTW) gestures on paths,
+and hand-skeleton gestures (a small temporal network, run as ONNX).
 
 Its modules:
 
@@ -8,7 +9,13 @@ Its modules:
 - ``dtw_classifier``: DTW template classification (dtaidistance);
 - ``gesture_spotter``: spotting gestures in a continuous stream;
 - ``gesture_templates``: template files and datasets;
-- ``gesture_recognizer``: static and dynamic recognizers together, as the node runs them.
+- ``gesture_recognizer``: static and dynamic recognizers together, as the node runs them;
+- ``skeleton_dataset``: SHREC'17-layout skeleton files (.npz), checked, class names;
+- ``skeleton_features``: DD-Net features of a skeleton sequence (joint distances, motion);
+- ``skeleton_classifier``: the shipped skeleton model through onnxruntime;
+- ``skeleton_network``: the network in torch (training only);
+- ``skeleton_training``: training, augmentation and ONNX export (torch, training only);
+- ``train_skeleton_gestures``: the training command (user-independent estimate, export).
 """
 
 from motion_common.lazy_exports import lazy_exports
@@ -27,6 +34,10 @@ _PUBLIC = {
     "load_dataset": "gesture_templates",
     "GestureRecognizer": "gesture_recognizer",
     "load_classifier": "gesture_recognizer",
+    "SkeletonDataset": "skeleton_dataset",
+    "load_skeleton_dataset": "skeleton_dataset",
+    "SkeletonClassifier": "skeleton_classifier",
+    "SkeletonResult": "skeleton_classifier",
 }
 __all__ = list(_PUBLIC)
 

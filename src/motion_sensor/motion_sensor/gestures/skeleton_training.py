@@ -1,0 +1,173 @@
+"""Training of the skeleton gesture network (torch, CPU), its user-independent estimate
+and its ONNX export. Development only: torch comes from requirements-train.txt; the
+runtime reads the exported model with onnxruntime (``skeleton_classifier``).
+
+Reproducible: numpy and torch are seeded from ``TrainConfig.seed`` and torch runs
+deterministic kernels on ``threads`` threads (1 by default: the machine is shared).
+
+Augmentation, drawn per sequence and epoch: a rotation (up to ``rotate_deg`` about the
+vertical axis, a third of it about the two others), a scale, Gaussian joint noise and a
+time warp (a random crop of up to ``crop`` of the sequence at each end and a smooth
+non-uniform speed).
+"""
+
+import os
+import time
+import warnings
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from motion_sensor.gestures.skeleton_features import FRAMES, batch_features, skeleton_features
+
+__all__ = ["TrainConfig", "augment", "train_model", "predict", "export_onnx", "fold_28_to_14"]
+
+
+@dataclass
+class TrainConfig:
+    """Training settings; the defaults trained the shipped model."""
+
+    filters: int = 32
+    epochs: int = 160
+    batch: int = 64
+    lr: float = 2e-3
+    weight_decay: float = 1e-4
+    label_smoothing: float = 0.1
+    rotate_deg: float = 15.0
+    scale: float = 0.15
+    noise_m: float = 0.002
+    crop: float = 0.1
+    warp: float = 0.3
+    seed: int = 0
+    threads: int = 1
+
+    def as_dict(self):
+        return asdict(self)
+
+
+def _rotation(rng, max_deg):
+    angles = np.radians(rng.uniform(-1.0, 1.0, 3) * np.array([max_deg / 3, max_deg / 3, max_deg]))
+    cx, cy, cz = np.cos(angles)
+    sx, sy, sz = np.sin(angles)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def augment(sequence, rng, config):
+    """One augmented copy of ``sequence`` (L, 22, 3) and the fractional frames to sample."""
+    seq = np.asarray(sequence, dtype=np.float64)
+    centre = seq[:, 1].mean(axis=0)
+    seq = (seq - centre) @ _rotation(rng, config.rotate_deg).T
+    seq = seq * (1.0 + rng.uniform(-config.scale, config.scale)) + centre
+    seq = seq + rng.normal(0.0, config.noise_m, seq.shape)
+    last = len(seq) - 1
+    start = rng.uniform(0.0, config.crop) * last
+    end = last - rng.uniform(0.0, config.crop) * last
+    u = np.linspace(0.0, 1.0, FRAMES)
+    bend = rng.uniform(-config.warp, config.warp)
+    warped = u + bend * u * (1.0 - u)  # monotonic while |bend| < 1
+    return seq, start + warped * (end - start)
+
+
+def _torch(config):
+    import torch
+
+    torch.manual_seed(config.seed)
+    torch.set_num_threads(config.threads)
+    torch.use_deterministic_algorithms(True)
+    return torch
+
+
+def train_model(dataset, config=None, log=None):
+    """Train a ``SkeletonNet`` on ``dataset`` (a ``SkeletonDataset``); returns it in eval mode."""
+    from motion_sensor.gestures.skeleton_network import SkeletonNet
+
+    config = config or TrainConfig()
+    torch = _torch(config)
+    rng = np.random.default_rng(config.seed)
+    model = SkeletonNet(filters=config.filters)
+    optimizer = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay)
+    steps_per_epoch = max(1, int(np.ceil(len(dataset) / config.batch)))
+    scheduler = torch.optim.lr_scheduler.OneCycleLR(
+        optimizer, max_lr=config.lr, total_steps=config.epochs * steps_per_epoch, pct_start=0.1
+    )
+    loss_fn = torch.nn.CrossEntropyLoss(label_smoothing=config.label_smoothing)
+    y14 = torch.as_tensor(dataset.label14)
+    y28 = torch.as_tensor(dataset.label28)
+    started = time.monotonic()
+    for epoch in range(config.epochs):
+        model.train()
+        sequences, positions = zip(*(augment(s, rng, config) for s in dataset.sequences), strict=True)
+        jcd, slow, fast = (torch.as_tensor(a) for a in batch_features(sequences, positions))
+        order = torch.as_tensor(rng.permutation(len(dataset)))
+        total = 0.0
+        for first in range(0, len(order), config.batch):
+            idx = order[first : first + config.batch]
+            if len(idx) < 2:  # batch norm needs two samples
+                continue
+            out14, out28 = model(jcd[idx], slow[idx], fast[idx])
+            loss = loss_fn(out14, y14[idx]) + loss_fn(out28, y28[idx])
+            optimizer.zero_grad()
+            loss.backward()
+            optimizer.step()
+            scheduler.step()
+            total += loss.item() * len(idx)
+        if log and (epoch + 1) % max(1, config.epochs // 8) == 0:
+            log(
+                f"epoch {epoch + 1}/{config.epochs}: loss {total / len(dataset):.3f} "
+                f"({time.monotonic() - started:.0f} s)"
+            )
+    model.eval()
+    return model
+
+
+def fold_28_to_14(prob28):
+    """28-class probabilities (gesture x finger) summed to the 14 gestures."""
+    prob28 = np.asarray(prob28)
+    return prob28.reshape(len(prob28), 14, 2).sum(axis=2)
+
+
+def predict(model, sequences):
+    """(prob14, prob28) of a trained model on sequences; prob14 averages the 14-class head
+    with the 28-class head folded onto the gestures (what ``skeleton_classifier`` does)."""
+    import torch
+
+    jcd, slow, fast = (torch.as_tensor(a) for a in batch_features(sequences))
+    with torch.no_grad():
+        out14, out28 = model(jcd, slow, fast)
+    prob14 = torch.softmax(out14, dim=1).numpy()
+    prob28 = torch.softmax(out28, dim=1).numpy()
+    return 0.5 * (prob14 + fold_28_to_14(prob28)), prob28
+
+
+def export_onnx(model, path, metadata=None):
+    """Write the model (softmax outputs ``prob14``, ``prob28``) as ONNX, atomically."""
+    import copy
+
+    import onnx
+    import torch
+
+    exported = copy.deepcopy(model).eval()
+    exported.softmax = True
+    sample = [torch.as_tensor(a[None]) for a in skeleton_features(np.zeros((FRAMES, 22, 3)) + np.arange(22)[:, None])]
+    tmp = f"{path}.tmp"
+    with warnings.catch_warnings():  # the TorchScript exporter warns that it is the legacy one
+        warnings.simplefilter("ignore", DeprecationWarning)
+        torch.onnx.export(
+            exported,
+            tuple(sample),
+            tmp,
+            input_names=["jcd", "slow", "fast"],
+            output_names=["prob14", "prob28"],
+            dynamic_axes={name: {0: "batch"} for name in ("jcd", "slow", "fast", "prob14", "prob28")},
+            opset_version=17,
+            dynamo=False,
+        )
+    proto = onnx.load(tmp)
+    for key, value in (metadata or {}).items():
+        entry = proto.metadata_props.add()
+        entry.key, entry.value = str(key), str(value)
+    onnx.save(proto, tmp)
+    os.replace(tmp, path)
