@@ -10,7 +10,15 @@ shared with the kitting application):
 - ``program_check``: reachability, workspace fence and collision check of every waypoint
   and segment before the arm moves (in a pybullet scene);
 - ``program_runner``: replays a program through the manipulation API;
-- ``teach_report``: the teach demo's placement error, summary and taught-path plot.
+- ``teach_report``: the teach demo's placement error, summary and taught-path plot;
+- demonstrations recorded as LeRobot datasets: ``episode_frames`` (what a frame holds, made
+  at a fixed rate from the newest value of each stream), ``episode_recorder`` (start, stop,
+  discard, mark success, the start/stop gesture, the episode list), ``episode_writer_client``
+  (the writer process, fed without blocking), ``episode_wire`` (the messages to it),
+  ``lerobot_writer`` (that process: LeRobot's own writer, run in ``.venv-lerobot``),
+  ``dataset_store`` (one atomically committed version of the dataset per episode; the
+  folder check), ``lerobot_reader`` and ``lerobot_readback`` (a dataset read back by
+  LeRobot's own loader, as NumPy arrays).
 
 Plain Python: no rospy outside ``nodes/``. The names in ``__all__`` are imported from
 their module on first use, so ``import motion_apps`` loads neither pybullet nor
@@ -40,6 +48,12 @@ _PUBLIC = {
     "write_summary": "teach_report",
     "format_summary": "teach_report",
     "plot_taught_path": "teach_report",
+    "EpisodeFrames": "episode_frames",
+    "EpisodeRecorder": "episode_recorder",
+    "EpisodeWriterClient": "episode_writer_client",
+    "DatasetStore": "dataset_store",
+    "check_dataset_folder": "dataset_store",
+    "read_dataset": "lerobot_readback",
 }
 __all__ = list(_PUBLIC)
 

@@ -1,0 +1,178 @@
+"""What one frame of a recorded episode holds, and the fixed-rate sampling that makes frames
+from the latest value of each stream (plain Python: the recorder node feeds it).
+
+LeRobot features (float32 unless said):
+
+- ``observation.state``: measured joint positions (rad), URDF joint order, then the gripper
+  (1 closed, 0 open; LeRobot's arms put it there too);
+- ``observation.velocity``: measured joint velocities (rad/s);
+- ``observation.tool_pose``: measured tool pose, x y z (m) qx qy qz qw, base frame;
+- ``observation.hand``: the operator's primary hand: palm x y z (m) qx qy qz qw (device
+  frame), grab and pinch strength (0..1, -1 unknown), visible (1/0);
+- ``observation.images.<camera>``: the camera image (video, uint8 RGB);
+- ``action``: the joint targets the core commanded (rad), then the gripper command (the
+  server's gripper state after each accepted SET_GRIPPER); before the first command, the
+  measured joints (holding still);
+- ``action.tool_target``: the core's tool target pose, x y z qx qy qz qw; before the first,
+  the measured tool pose.
+
+A frame is made at each tick of the recorder's clock from the newest value of every
+stream, so all frames are ``1 / fps`` apart (LeRobot's timestamps are ``index / fps``). A
+camera image that is not new since the previous frame is counted as repeated (``camera``
+counts in the episode's record), so a camera slower than ``fps`` shows as a loss.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["EpisodeFrames", "FrameCounts", "HAND_NAMES", "POSE_NAMES", "camera_key"]
+
+POSE_NAMES = ["x", "y", "z", "qx", "qy", "qz", "qw"]
+HAND_NAMES = ["palm_x", "palm_y", "palm_z", "palm_qx", "palm_qy", "palm_qz", "palm_qw", "grab", "pinch", "visible"]
+
+
+def camera_key(name: str) -> str:
+    return f"observation.images.{name}"
+
+
+@dataclass
+class FrameCounts:
+    """Per-episode counts the recorder reports in the episode's record."""
+
+    frames: int = 0
+    camera_new: int = 0
+    camera_repeated: int = 0
+    skipped_not_ready: int = 0
+    extra: dict = field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        return {
+            "frames_sampled": self.frames,
+            "camera_new_frames": self.camera_new,
+            "camera_repeated_frames": self.camera_repeated,
+            "ticks_without_state": self.skipped_not_ready,
+            **self.extra,
+        }
+
+
+class EpisodeFrames:
+    """The newest value of each stream, and frames made from them."""
+
+    def __init__(self, camera: str = "", image_size: tuple = (0, 0)):
+        self.camera = camera  # empty: no camera stream
+        self.image_size = tuple(image_size)  # (width, height); (0, 0): as received
+        self.joint_names = None
+        self.joints = self.velocities = None
+        self.tool = None
+        self.gripper = 0.0
+        self.hand = np.array([0, 0, 0, 0, 0, 0, 1, -1, -1, 0], dtype=np.float32)
+        self.command = None
+        self.target = None
+        self.image = None
+        self._image_serial = 0
+        self._sampled_serial = 0
+        self.counts = FrameCounts()
+
+    # -- inputs -------------------------------------------------------------------------
+    def on_joints(self, names, positions, velocities) -> None:
+        if self.joint_names is None:
+            self.joint_names = list(names)
+        if list(names) != self.joint_names:
+            return  # another arm's message on the same topic: not this episode's
+        self.joints = np.asarray(positions, dtype=np.float32)
+        v = np.asarray(velocities, dtype=np.float32)
+        self.velocities = v if v.shape == self.joints.shape else np.zeros_like(self.joints)
+
+    def on_tool(self, position, quaternion) -> None:
+        self.tool = np.asarray(list(position) + list(quaternion), dtype=np.float32)
+
+    def on_gripper(self, closed: bool) -> None:
+        self.gripper = 1.0 if closed else 0.0
+
+    def on_hand(self, visible: bool, position=(0, 0, 0), quaternion=(0, 0, 0, 1), grab=-1.0, pinch=-1.0) -> None:
+        if visible:
+            values = list(position) + list(quaternion) + [grab, pinch, 1.0]
+        else:
+            values = list(self.hand[:9]) + [0.0]  # the last pose seen, marked not visible
+        self.hand = np.asarray(values, dtype=np.float32)
+
+    def on_command(self, names, positions) -> None:
+        if self.joint_names is not None and list(names) and list(names) != self.joint_names:
+            return
+        self.command = np.asarray(positions, dtype=np.float32)
+
+    def on_target(self, position, quaternion) -> None:
+        self.target = np.asarray(list(position) + list(quaternion), dtype=np.float32)
+
+    def on_image(self, rgb: np.ndarray) -> None:
+        """A new camera image, HxWx3 uint8 RGB (resized to ``image_size`` when set)."""
+        if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
+            raise ValueError(f"camera image must be HxWx3 uint8, got {rgb.shape} {rgb.dtype}")
+        width, height = self.image_size
+        if width and height and (rgb.shape[1], rgb.shape[0]) != (width, height):
+            import cv2  # noqa: PLC0415 - only with a camera
+
+            rgb = cv2.resize(rgb, (width, height), interpolation=cv2.INTER_AREA)
+        self.image = rgb
+        self._image_serial += 1
+
+    # -- outputs ------------------------------------------------------------------------
+    def missing(self) -> list:
+        """The streams a frame still needs."""
+        need = [("joint_states", self.joints), ("tool pose", self.tool)]
+        if self.camera:
+            need.append((f"camera {self.camera}", self.image))
+        return [name for name, value in need if value is None]
+
+    def features(self) -> dict:
+        """LeRobot's feature declarations (needs the joints, and the camera's first image)."""
+        if self.missing():
+            raise ValueError(f"cannot declare the dataset's features before {', '.join(self.missing())} arrive")
+        joints = list(self.joint_names)
+        with_gripper = joints + ["gripper"]
+        out = {
+            "observation.state": {"dtype": "float32", "shape": [len(with_gripper)], "names": with_gripper},
+            "observation.velocity": {"dtype": "float32", "shape": [len(joints)], "names": joints},
+            "observation.tool_pose": {"dtype": "float32", "shape": [7], "names": POSE_NAMES},
+            "observation.hand": {"dtype": "float32", "shape": [len(HAND_NAMES)], "names": HAND_NAMES},
+            "action": {"dtype": "float32", "shape": [len(with_gripper)], "names": with_gripper},
+            "action.tool_target": {"dtype": "float32", "shape": [7], "names": POSE_NAMES},
+        }
+        if self.camera:
+            h, w = self.image.shape[:2]
+            out[camera_key(self.camera)] = {
+                "dtype": "video",
+                "shape": [h, w, 3],
+                "names": ["height", "width", "channels"],
+            }
+        return out
+
+    def reset_counts(self) -> None:
+        self.counts = FrameCounts()
+        self._sampled_serial = self._image_serial - 1  # the image already there is the episode's first
+
+    def sample(self) -> dict | None:
+        """The frame of this tick, or None (counted) while a required stream is missing."""
+        if self.missing():
+            self.counts.skipped_not_ready += 1
+            return None
+        gripper = np.array([self.gripper], dtype=np.float32)
+        joints_target = self.command if self.command is not None else self.joints
+        frame = {
+            "observation.state": np.concatenate([self.joints, gripper]),
+            "observation.velocity": self.velocities.copy(),
+            "observation.tool_pose": self.tool.copy(),
+            "observation.hand": self.hand.copy(),
+            "action": np.concatenate([joints_target, gripper]),
+            "action.tool_target": (self.target if self.target is not None else self.tool).copy(),
+        }
+        if self.camera:
+            frame[camera_key(self.camera)] = self.image
+            if self._image_serial != self._sampled_serial:
+                self.counts.camera_new += 1
+            else:
+                self.counts.camera_repeated += 1
+            self._sampled_serial = self._image_serial
+        self.counts.frames += 1
+        return frame
