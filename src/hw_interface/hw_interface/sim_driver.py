@@ -515,7 +515,6 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             with self._lock:
                 if self._client is None:
                     break
-                previous_target = self._target
                 if self._path is None:
                     if self._last_stream is not None and self._sim_time - self._last_stream > self.stream_timeout:
                         # The stream stopped (a client died, the network was cut): brake to rest.
@@ -523,18 +522,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                         self._last_stream = None
                         self.stream_timeouts += 1
                     self._target = self._follower.step(self.time_step)
-                    feed_forward = self._follower.velocity.tolist()
                 else:
                     elapsed = self._sim_time - self._path_start
                     self._target = self._path.sample(elapsed)
-                    # The path's own speed, within the limits it was planned for; none once
-                    # it has ended (settling, or stopped after a fault).
-                    speeds = np.asarray(self._max_speeds)
-                    feed_forward = (
-                        np.clip((self._target - previous_target) / self.time_step, -speeds, speeds).tolist()
-                        if 0.0 < elapsed < self._path.duration
-                        else [0.0] * len(speeds)
-                    )
                     if elapsed >= self._path.duration:
                         error = self._goal_error()
                         if error <= self.goal_tolerance:
@@ -558,22 +548,16 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 # gravity would otherwise catch up faster than the limit).
                 gain = 0.6  # pybullet positionGain, the same for every joint
                 forces = (self._efforts * 4.0).tolist()
-                # Velocity feed-forward: the setpoint's own velocity is the servo's velocity
-                # target (pybullet's motor drives gain * position error + velocity error), so
-                # a moving setpoint is followed without the lag a zero velocity target (a
-                # damper) would add; it is within the follower's speed limits by construction.
-                for joint, target, velocity, force, speed in zip(
-                    self._joint_indices, self._target.tolist(), feed_forward, forces, self._max_speeds
+                for joint, target, force, speed in zip(
+                    self._joint_indices, self._target.tolist(), forces, self._max_speeds
                 ):
                     self._client.setJointMotorControl2(
                         self._body,
                         joint,
                         pybullet.POSITION_CONTROL,
                         targetPosition=target,
-                        targetVelocity=velocity,
                         force=force,
                         positionGain=gain,
-                        velocityGain=1.0,
                         maxVelocity=speed,
                     )
                 self._client.stepSimulation()

@@ -85,3 +85,75 @@ def test_brake_stops_at_rest_within_the_acceleration_limit():
     assert np.max(np.abs(acceleration)) <= 200.0 + 1e-6
     assert follower.at_rest
     assert path[-1][0] - path[0][0] <= moving[0] ** 2 / (2 * 200.0) + 1e-6
+
+
+def stream(follower, goal_at, seconds, period=0.009):
+    """Step the follower at DT while goals ``goal_at(t)`` arrive every ``period`` (a 110 Hz
+    teleop stream); return (goal rows (t, q...), setpoint rows (t, q...))."""
+    goals, setpoints, t, due = [], [], 0.0, 0.0
+    while t < seconds:
+        if t >= due - 1e-12:
+            goal = np.array(goal_at(t), dtype=float)
+            follower.set_goal(goal)
+            goals.append((t, *goal))
+            due += period
+        setpoints.append((t + DT, *follower.step(DT)))
+        t += DT
+    return np.array(goals), np.array(setpoints)
+
+
+def test_a_moving_stream_is_followed_without_falling_a_command_period_behind():
+    from motion_commander.lag_estimate import best_lag
+
+    follower = StreamFollower(LIMITS, np.zeros(3), acceleration=200.0)
+    goals, setpoints = stream(follower, lambda t: 0.3 * np.sin(2 * np.pi * 1.0 * t) * np.array([1.0, -0.5, 0.2]), 3.0)
+    lag, _ = best_lag(goals[:, :2], setpoints[:, :2], np.arange(0.0, 0.03, 0.0005))
+    # Braking to stop at every goal, as if each were the last, trailed by 10.5 ms here.
+    assert lag <= 0.002, f"{lag * 1000:.1f} ms behind the goals"
+    velocity, acceleration = derivatives(setpoints[:, 1:])
+    assert np.all(np.abs(velocity) <= LIMITS + 1e-9)
+    assert np.max(np.abs(acceleration)) <= 200.0 + 1e-6
+    # Past the goal's turning points by no more than the lead's prediction error there:
+    # about a T^2 with the goal's 12 rad/s^2 at its peaks and T = 9 ms, 1 mrad (0.5 mm at
+    # 0.5 m reach).
+    assert np.max(setpoints[:, 1]) <= np.max(goals[:, 1]) + 1e-3
+    assert np.min(setpoints[:, 1]) >= np.min(goals[:, 1]) - 1e-3
+
+
+def test_a_stream_that_ends_at_speed_settles_on_its_last_goal():
+    follower = StreamFollower(LIMITS, np.zeros(3), acceleration=200.0)
+    goals, setpoints = stream(follower, lambda t: np.array([1.0, 0.0, 0.0]) * min(t, 0.3), 0.31)
+    last = goals[-1, 1:]
+    tail = run(follower, 200)
+    np.testing.assert_allclose(tail[-1], last, atol=1e-9)
+    # Led past it by at most one command interval at the stream's speed (1 rad/s x 9 ms).
+    assert np.max(tail[:, 0]) <= last[0] + 1.0 * 0.009 + 1e-9
+
+
+def test_a_repeated_goal_means_stopped_but_the_same_goal_object_each_period_does_not():
+    follower = StreamFollower(LIMITS, np.zeros(3), acceleration=200.0)
+    for k in range(1, 6):
+        follower.set_goal(np.array([0.01 * k, 0.0, 0.0]))
+        run(follower, 5)  # 10 ms between goals: 1 rad/s
+    np.testing.assert_allclose(follower.goal_velocity, [1.0, 0.0, 0.0])
+    same = np.array([0.06, 0.0, 0.0])
+    follower.set_goal(same)
+    for _ in range(4):  # a fixed-rate servo loop passes the latest goal every period
+        follower.set_goal(same)
+        follower.step(DT)
+    np.testing.assert_allclose(follower.goal_velocity, [1.0, 0.0, 0.0])
+    follower.set_goal(np.array([0.06, 0.0, 0.0]))  # a new goal, the same values: stopped
+    np.testing.assert_array_equal(follower.goal_velocity, [0.0, 0.0, 0.0])
+    tail = run(follower, 300)
+    np.testing.assert_allclose(tail[-1], [0.06, 0.0, 0.0], atol=1e-9)
+
+
+def test_brake_and_reset_drop_the_lead():
+    follower = StreamFollower(LIMITS, np.zeros(3), acceleration=200.0)
+    for k in range(1, 4):
+        follower.set_goal(np.array([0.01 * k, 0.0, 0.0]))
+        run(follower, 5)
+    follower.brake()
+    np.testing.assert_array_equal(follower.goal_velocity, 0.0)
+    follower.reset(np.zeros(3))
+    np.testing.assert_array_equal(follower.goal_velocity, 0.0)
