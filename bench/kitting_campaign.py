@@ -1,19 +1,30 @@
-"""The kitting cell's campaign (the paper's 90 trials, 15 per class): the simulated cell of
-launch/kitting_sim.launch, headless, with its own ROS master on a free port, fed one part
-per trial by kitting_trials. Shows a progress bar and one line per trial, then the
-per-class table (detection, classification, pick, place, pose error).
+"""The kitting cell's campaign (the paper's 90 trials, 15 per class, as 15 kits of one part
+of each class): the simulated cell of launch/kitting_sim.launch, headless, with its own ROS
+master on a free port, fed kit by kit by kitting_trials. Shows a progress bar and one line
+per part, then the per-class table (detection, classification, pick, place, pose error).
 
-Writes bench/results/kitting_campaign.json (success_rate, pose_error_mm_p50/p95 = belt-plane
-distance between each vision pose and the simulator's true pose at the image's stamp,
-picks_per_minute, spawn-to-place times, physics real-time factor, per-class table, every
-trial) and bench/results/kitting_campaign_confusion.png. The session's full log goes to
-bench/results/kitting_campaign.log.
+Writes bench/results/<name>.json (success_rate, kit score (ARIAC's kitting score, summed
+over the kits), misses (parts that rode off the belt unpicked), pose_error_mm_p50/p95 =
+belt-plane distance between each vision pose and the simulator's true pose at the image's
+stamp, picks_per_minute, arrival rate, spawn-to-place times, physics real-time factor,
+per-class table, every part and kit) and bench/results/<name>_confusion.png. The
+session's full log goes to bench/results/<name>.log. A run that ends without a summary
+writes nothing.
 
-Run: bench/run kitting_campaign [--trials 90] [--seed N] [--perturb]
+--feed continuous --rate R puts a part on the belt every 60/R s, several at once.
+--rates R1,R2,... runs one continuous campaign per rate and draws the busy-belt curve
+(success, picks/min and misses against the arrival rate) into bench/results/kitting_belt.png
+with bench/results/kitting_belt.json (the highest rate with >= 99 % success).
+
+Run: bench/run kitting_campaign [--trials 90] [--seed N] [--perturb] [--kit-order FILE]
+     [--feed continuous --rate 6 | --rates 3,4,5,6,7] [--ur-fake] [--name NAME]
 """
 
 import argparse
+import glob
+import io
 import json
+import math
 import os
 import shutil
 import socket
@@ -23,9 +34,29 @@ import tempfile
 import time
 
 from bench_common import RESULTS, ROOT, write_results
+from motion_common.atomic_file import write_atomic
 
 LAUNCH = os.path.join(ROOT, "src", "motion_bringup", "launch", "kitting_sim.launch")
 RUN_SESSION = os.path.join(ROOT, "scripts", "run_session")
+CLASSES = ("bolt_yellow", "bolt_silver", "nut_yellow", "nut_silver", "washer_yellow", "washer_silver")
+HEADLINE = (
+    "trials",
+    "success_rate",
+    "kit_score_rate",
+    "kits_complete",
+    "kits",
+    "misses",
+    "pose_error_mm_p50",
+    "pose_error_mm_p95",
+    "picks_per_minute",
+    "arrival_rate_per_min",
+    "spawn_to_place_s_p50",
+    "spawn_to_place_s_p99",
+    "physics_real_time_factor_min",
+    "physics_real_time_factor_mean",
+    "unverified_picks",
+    "wall_time_s",
+)
 
 
 def free_port() -> int:
@@ -34,30 +65,10 @@ def free_port() -> int:
         return probe.getsockname()[1]
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(
-        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    parser.add_argument(
-        "--trials",
-        type=int,
-        default=90,
-        help="number of trials, cycling through the six classes (default 90 = 15 per class, as in the paper)",
-    )
-    parser.add_argument("--seed", type=int, default=1, help="random seed of positions, orientations, perturbations")
-    parser.add_argument(
-        "--perturb",
-        action="store_true",
-        help="vary lighting, camera pose (±2 cm / ±2°, then "
-        "re-registered from the markers), belt speed (±30 %%) and part orientation per trial",
-    )
-    parser.add_argument("--robot", default="ur10e", choices=("ur10e", "ur5e"), help="robot model")
-    args = parser.parse_args(argv)
-    if args.trials < 1:
-        parser.error("--trials must be at least 1")
-    os.makedirs(RESULTS, exist_ok=True)
+def run_campaign(args, feed: str, rate: float, name: str) -> dict | None:
+    """One session; its summary (also written as bench/results/<name>.json), or None."""
     output = tempfile.mkdtemp(prefix="kitting-campaign-")
-    log_path = os.path.join(RESULTS, "kitting_campaign.log")
+    log_path = os.path.join(RESULTS, f"{name}.log")
     env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{free_port()}")
     command = [
         sys.executable,
@@ -71,10 +82,17 @@ def main(argv=None) -> int:
         f"robot:={args.robot}",
         f"output_dir:={output}",
         "required_trials:=false",
+        f"feed:={feed}",
+        f"rate:={rate}",
     ]
+    if args.kit_order:
+        command.append(f"kit_order:={os.path.abspath(args.kit_order)}")
+    if args.ur_fake:
+        command.append("ur_fake:=true")
     print(
-        f"kitting campaign: {args.trials} trials, seed {args.seed}, perturb {args.perturb}, "
-        f"master {env['ROS_MASTER_URI']}; log {log_path}",
+        f"kitting campaign: {args.trials} parts, seed {args.seed}, perturb {args.perturb}, feed {feed}"
+        + (f" at {rate:g} parts/min" if feed == "continuous" else "")
+        + f", master {env['ROS_MASTER_URI']}; log {log_path}",
         flush=True,
     )
     started = time.monotonic()
@@ -85,50 +103,141 @@ def main(argv=None) -> int:
         try:
             for line in process.stdout:
                 log.write(line)
-                # The trials' own lines (progress bar, table, summary) go to the screen.
-                if line.startswith(("[#", "[ ", "kitting_trials", "class ", "success ", "  failed")) or line.split(" ")[
-                    0
-                ] in ("bolt_yellow", "bolt_silver", "nut_yellow", "nut_silver", "washer_yellow", "washer_silver"):
+                # The trials' own lines (progress bar, kits, table, summary) go to the screen.
+                if line.startswith(("[#", "[ ", "kitting_trials", "class ", "success ", "  failed", "  kit ")) or (
+                    line.split(" ")[0] in CLASSES
+                ):
                     print(line, end="", flush=True)
             code = process.wait()
         except KeyboardInterrupt:
             process.terminate()
             process.wait()
             print("campaign interrupted", file=sys.stderr)
-            return 130
+            raise
     wall = time.monotonic() - started
-    summary_path = os.path.join(output, "kitting_summary.json")
-    if not os.path.isfile(summary_path):
+    # The session writes into its own run folder under output_dir.
+    found = sorted(glob.glob(os.path.join(output, "**", "kitting_summary.json"), recursive=True))
+    if not found:
         print(f"the session ended (code {code}) without a summary; see {log_path}", file=sys.stderr)
-        return 2
-    with open(summary_path, encoding="utf-8") as stream:
+        shutil.rmtree(output, ignore_errors=True)
+        return None
+    with open(found[-1], encoding="utf-8") as stream:
         summary = json.load(stream)
-    shutil.copyfile(
-        os.path.join(output, "kitting_confusion.png"), os.path.join(RESULTS, "kitting_campaign_confusion.png")
-    )
+    confusion = os.path.join(os.path.dirname(found[-1]), "kitting_confusion.png")
+    if os.path.isfile(confusion):
+        with open(confusion, "rb") as stream:
+            write_atomic(os.path.join(RESULTS, f"{name}_confusion.png"), stream.read())
     shutil.rmtree(output, ignore_errors=True)
-    summary.update(wall_time_s=wall, command=" ".join(["bench/run kitting_campaign"] + (argv or sys.argv[1:])))
-    headline = {
-        k: summary[k]
-        for k in (
-            "trials",
-            "success_rate",
-            "pose_error_mm_p50",
-            "pose_error_mm_p95",
-            "picks_per_minute",
-            "spawn_to_place_s_p50",
-            "spawn_to_place_s_p99",
-            "physics_real_time_factor_min",
-            "physics_real_time_factor_mean",
-            "unverified_picks",
-            "wall_time_s",
-        )
-        if k in summary
+    summary.update(wall_time_s=wall, command=" ".join(["bench/run kitting_campaign"] + sys.argv[1:]))
+    write_results(name, summary, show=False)
+    print(json.dumps({k: summary[k] for k in HEADLINE if k in summary}, indent=2, default=float))
+    return summary
+
+
+def belt_curve(rows: list[dict], path: str):
+    """Success, picks/min and misses against the arrival rate (PNG, atomically)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rates = [r["rate"] for r in rows]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6.5), sharex=True)
+    top.plot(rates, [100 * r["success_rate"] for r in rows], "o-", label="success (placed in its slot)")
+    top.axhline(99, color="grey", linestyle=":", label="99 %")
+    top.set_ylabel("success, %")
+    top.legend(loc="lower left")
+    bottom.plot(rates, [r["picks_per_minute"] for r in rows], "s-", label="picks / min (placed)")
+    bottom.plot(rates, rates, color="grey", linestyle=":", label="arrival rate")
+    bottom.bar(rates, [r["misses"] for r in rows], width=0.2, alpha=0.4, color="C3", label="misses (parts)")
+    bottom.set_xlabel("arrival rate, parts / min")
+    bottom.set_ylabel("picks / min; misses")
+    bottom.legend(loc="upper left")
+    top.set_title("kitting cell, busy belt (default belt speed)")
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    plt.close(fig)
+    write_atomic(path, buffer.getvalue())
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument(
+        "--trials",
+        type=int,
+        default=90,
+        help="parts fed, as kits of one part of each class (default 90 = 15 kits, 15 per class, as in the paper)",
+    )
+    parser.add_argument("--seed", type=int, default=1, help="random seed of order, positions, perturbations")
+    parser.add_argument(
+        "--perturb",
+        action="store_true",
+        help="vary lighting, camera pose (±2 cm / ±2°, then "
+        "re-registered from the markers), belt speed (±30 %%, one part at a time only) and part orientation",
+    )
+    parser.add_argument("--robot", default="ur10e", choices=("ur10e", "ur5e"), help="robot model")
+    parser.add_argument("--kit-order", default="", help="kit order YAML (then --trials is ignored)")
+    parser.add_argument("--feed", default="one_at_a_time", choices=("one_at_a_time", "continuous"))
+    parser.add_argument("--rate", type=float, default=4.0, help="parts per minute with --feed continuous")
+    parser.add_argument("--rates", default="", help="comma-separated rates (parts/min): the busy-belt curve")
+    parser.add_argument("--ur-fake", action="store_true", help="the UR driver on its simulated controller")
+    parser.add_argument("--name", default="", help="results name (default kitting_campaign, kitting_belt_<rate>)")
+    args = parser.parse_args(argv)
+    if args.trials < 1:
+        parser.error("--trials must be at least 1")
+    os.makedirs(RESULTS, exist_ok=True)
+    try:
+        if not args.rates:
+            default = "kitting_campaign" if args.feed == "one_at_a_time" else f"kitting_belt_{args.rate:g}"
+            summary = run_campaign(args, args.feed, args.rate, args.name or default)
+            if summary is None:
+                return 2
+            return 0 if summary.get("success_rate") == 1.0 else 1
+        rates = sorted(float(r) for r in args.rates.split(","))
+        rows = []
+        for rate in rates:
+            summary = run_campaign(args, "continuous", rate, f"{args.name or 'kitting_belt'}_{rate:g}")
+            if summary is None:
+                continue
+            rows.append(
+                {
+                    "rate": rate,
+                    "arrival_rate_per_min": summary.get("arrival_rate_per_min"),
+                    "success_rate": summary["success_rate"],
+                    "picks_per_minute": summary["picks_per_minute"],
+                    "misses": summary["misses"],
+                    "trials": summary["trials"],
+                    "kit_score_rate": summary.get("kit_score_rate"),
+                    "failures": [f["reason"] or f["state"] for f in summary["failures"]],
+                }
+            )
+    except KeyboardInterrupt:
+        return 130
+    if not rows:
+        print("no busy-belt run ended with a summary: nothing written", file=sys.stderr)
+        return 2
+    good = [r["rate"] for r in rows if r["success_rate"] >= 0.99]
+    result = {
+        "rows": rows,
+        "highest_rate_99_percent": max(good) if good else math.nan,
+        "seed": args.seed,
+        "trials_per_rate": args.trials,
+        "command": " ".join(["bench/run kitting_campaign"] + (argv or sys.argv[1:])),
     }
-    write_results("kitting_campaign", summary, show=False)
-    print(json.dumps(headline, indent=2))
-    print(f"confusion matrix: {os.path.join(RESULTS, 'kitting_campaign_confusion.png')}")
-    return 0 if summary.get("success_rate") == 1.0 else 1
+    name = args.name or "kitting_belt"
+    write_results(name, result, show=False)
+    belt_curve(rows, os.path.join(RESULTS, f"{name}.png"))
+    for r in rows:
+        print(
+            f"rate {r['rate']:4.1f}/min: success {100 * r['success_rate']:5.1f} %, "
+            f"{r['picks_per_minute']:.2f} picks/min, {r['misses']} misses"
+        )
+    print(f"highest rate with >= 99 % success: {result['highest_rate_99_percent']} parts/min")
+    print(f"written: {os.path.join(RESULTS, name + '.json')}, {os.path.join(RESULTS, name + '.png')}")
+    return 0
 
 
 if __name__ == "__main__":

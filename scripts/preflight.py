@@ -126,6 +126,18 @@ def _check_files(session: _Session, node, values: dict) -> list[str]:
     if node.type == "kinect_driver":
         path = values.get("fakenect_dump", "")
         errors += _exists(path, "Kinect dump directory", session.origin(path, config_file))
+    if node.type == "kitting_trials" and values.get("kit_order"):
+        path = values["kit_order"]
+        origin = session.origin(path, config_file)
+        errors += _exists(path, "kit order", origin)
+        if not errors:
+            from kitting.cell import DEFAULT_CELL, load_cell
+            from kitting.kits import KitOrderError, load_kit_order
+
+            try:
+                load_kit_order(os.path.expanduser(path), load_cell(values.get("cell") or DEFAULT_CELL))
+            except (KitOrderError, ValueError, OSError) as exc:
+                errors.append(f"{origin}: {exc}")
     return errors
 
 
@@ -226,6 +238,13 @@ def _check_choices(launch_file: str, values: dict, declared: dict) -> list[str]:
             "command line engage:=gesture: the SpaceMouse shows no second hand; use engage:=button (its left "
             "button is the clutch; the default with device:=spacemouse)"
         )
+    if values.get("ur_fake") == "true" and "ur_fake" in declared:
+        ignored = [name for name in ("driver", "driver_params", "driver_config") if name in values]
+        if ignored:
+            errors.append(
+                f"command line ur_fake:=true with {', '.join(n + ':=' for n in ignored)}: the UR path drives the UR "
+                "driver on its simulated controller with hw_interface/config/ur_driver.yaml; leave them out"
+            )
     if "urdf" in values and "robot_config" in declared and "robot_config" not in values:
         robot = values.get("robot", declared["robot"].default if "robot" in declared else "")
         shipped = os.path.join(ROOT, "src", "motion_common", "urdf", f"{robot}.urdf")

@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .kits import kit_summary
 from .parts import CLASS_NAMES
 
 UNKNOWN = "(missed)"
@@ -30,16 +31,27 @@ class Trial:
     belt_speed: float = math.nan  # m/s; NaN keeps the cell's
     light_level: float = math.nan
     camera_offset: list[float] = field(default_factory=list)  # [dx dy dz (m), rx ry rz (rad)]
+    kit: int = 0  # the kit the part belongs to
 
 
-def plan_trials(count: int, seed: int, perturb: bool, belt_speed: float, max_y_offset: float = 0.06) -> list[Trial]:
-    """``count`` trials cycling through the six classes, drawn from ``seed``."""
+def plan_trials(
+    count: int,
+    seed: int,
+    perturb: bool,
+    belt_speed: float,
+    max_y_offset: float = 0.06,
+    classes: Sequence[str] | None = None,
+    kits: Sequence[int] | None = None,
+) -> list[Trial]:
+    """``count`` trials drawn from ``seed``: of the given ``classes`` (and ``kits``) in
+    order, else cycling through the six classes. The random draws do not depend on the
+    classes: the same seed gives the same places and perturbations."""
     rng = np.random.default_rng(seed)
     trials = []
     for index in range(count):
         trial = Trial(
             index,
-            CLASS_NAMES[index % len(CLASS_NAMES)],
+            classes[index] if classes is not None else CLASS_NAMES[index % len(CLASS_NAMES)],
             float(rng.uniform(-max_y_offset, max_y_offset)),
             float(rng.uniform(-math.pi, math.pi)),
         )
@@ -47,6 +59,8 @@ def plan_trials(count: int, seed: int, perturb: bool, belt_speed: float, max_y_o
             trial.belt_speed = float(belt_speed * rng.uniform(0.7, 1.3))
             trial.light_level = float(rng.uniform(0.7, 1.2))
             trial.camera_offset = list(rng.uniform(-0.02, 0.02, 3)) + list(np.radians(rng.uniform(-2.0, 2.0, 3)))
+        if kits is not None:
+            trial.kit = int(kits[index])
         trials.append(trial)
     return trials
 
@@ -102,9 +116,12 @@ class CampaignStats:
         self.unmatched_detections = 0
         self.started: float | None = None
         self.finished: float | None = None
+        self.kit_scores: list = []  # kitting.kits.KitScore of each finished tray
+        self.spawn_times: list[float] = []
 
     def add_part(self, trial: Trial, part_id: int, now: float):
         self.parts[part_id] = PartRecord(trial, part_id, now)
+        self.spawn_times.append(now)
         if self.started is None:
             self.started = now
 
@@ -140,6 +157,12 @@ class CampaignStats:
         successes = sum(r.success for r in records)
         span_min = ((self.finished - self.started) / 60.0) if self.started is not None and self.finished else math.nan
         cycle = [r.resolved - r.spawned for r in records if r.success and r.resolved is not None]
+        spawns = sorted(self.spawn_times)
+        arrival = (
+            60.0 * (len(spawns) - 1) / (spawns[-1] - spawns[0])
+            if len(spawns) > 1 and spawns[-1] > spawns[0]
+            else math.nan
+        )
         return {
             "trials": len(records),
             "successes": successes,
@@ -152,6 +175,10 @@ class CampaignStats:
             "spawn_to_place_s_p99": float(np.percentile(cycle, 99)) if cycle else math.nan,
             "unmatched_detections": self.unmatched_detections,
             "unverified_picks": sum(r.unverified_picks for r in records),
+            # Parts that rode off the belt's end never picked (left the pick window unpicked).
+            "misses": sum(r.final_state == "gone" and not r.picked for r in records),
+            "arrival_rate_per_min": arrival,
+            **kit_summary(self.kit_scores),
             "per_class": self.per_class(),
             "failures": [
                 {
@@ -169,6 +196,7 @@ class CampaignStats:
             "trials_detail": [
                 dict(
                     asdict(r.trial),
+                    spawned=r.spawned,
                     part_id=r.part_id,
                     success=r.success,
                     predicted=r.predicted,

@@ -127,6 +127,23 @@ class CellSimulation:
             self._remove(part_id)
         self.held = None
 
+    def clear_tray(self) -> int:
+        """The tray swap: remove every part lying still or falling over the tray's footprint
+        (2 cm around it), in a slot or not; belt and held parts stay. Returns how many."""
+        tray = self.cell.tray
+        half = np.asarray(tray.size, float) / 2 + 0.02
+        c, s = math.cos(tray.yaw), math.sin(tray.yaw)
+        removed = 0
+        for state in self.states():
+            if state.state not in ("resting", "falling"):
+                continue
+            dx, dy = state.position[0] - tray.position[0], state.position[1] - tray.position[1]
+            local = (c * dx + s * dy, -s * dx + c * dy)
+            if abs(local[0]) <= half[0] and abs(local[1]) <= half[1]:
+                self._remove(state.part_id)
+                removed += 1
+        return removed
+
     def set_tool_pose(self, position, orientation):
         """The robot's tool0 pose (m; quaternion x, y, z, w), base frame."""
         position, orientation = np.asarray(position, float), np.asarray(orientation, float)

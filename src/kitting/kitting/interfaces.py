@@ -24,6 +24,11 @@ _PART_PRESENT = Topic(
     "the gripper's part sensor (the simulated magnet's: a part is held); the evidence for a pick the camera "
     "could not confirm",
 )
+_TRAY_SWAPPED = Topic(
+    "kitting/tray_swapped",
+    "std_msgs/Empty",
+    "the finished kit's tray was taken away: every slot is free again (one part per slot until then)",
+)
 _STOP_LATCHED = Topic("motion_controller/stop_latched", "std_msgs/Bool", "the server's latched stop")
 
 _CELL_SIM_PARAMS = ParamSchema(
@@ -66,6 +71,7 @@ KITTING_CELL_SIM = NodeInterface(
         Service("~spawn", "kitting/SpawnPart", "put a part on the belt"),
         Service("~set_conditions", "kitting/SetCellConditions", "lighting and camera perturbations"),
         Service("~clear", "std_srvs/Trigger", "remove every part"),
+        Service("~clear_tray", "std_srvs/Trigger", "the tray swap: remove the parts lying in the tray"),
     ),
 )
 
@@ -144,6 +150,7 @@ KITTING_NODE = NodeInterface(
         _STOP_LATCHED,
         _PARTS,
         Topic(_PART_PRESENT.name, _PART_PRESENT.type, _PART_PRESENT.doc, optional=True),
+        _TRAY_SWAPPED,
     ),
     calls=(Service("motion_controller", "motion_commander/commander", "the hardware interface"),),
 )
@@ -156,9 +163,23 @@ KITTING_TRIALS = NodeInterface(
     ParamSchema(
         [
             Param("cell", DEFAULT_CELL, doc="cell YAML"),
-            Param("trials", 6, "trials", "parts fed", low=1, high=100000),
+            Param("trials", 6, "trials", "parts fed (without kit_order)", low=1, high=100000),
             Param("seed", 1, doc="random seed of classes, poses and perturbations"),
             Param("perturb", False, doc="perturb lighting and camera per trial"),
+            Param(
+                "kit_order",
+                "",
+                doc="kit order YAML (kitting.kits: the part classes of each kit); empty: kits of one part of each "
+                "class, enough for trials parts",
+            ),
+            Param(
+                "feed",
+                "one_at_a_time",
+                doc="one_at_a_time: the next part once the last one rests; continuous: a part every 60/rate s, "
+                "several on the belt at once",
+                choices=("one_at_a_time", "continuous"),
+            ),
+            Param("rate", 4.0, "parts/min", "arrival rate of feed continuous", low=0.1, high=120.0),
             Param("trial_timeout", 60.0, "s", "longest one trial may take", low=0.0, low_open=True),
             Param("ready_timeout", 120.0, "s", "wait for the cell to be ready", low=0.0, low_open=True),
             Param("output_dir", "output", doc="folder for kitting_summary.json"),
@@ -172,6 +193,7 @@ KITTING_TRIALS = NodeInterface(
         ]
     ),
     publishes=(
+        _TRAY_SWAPPED,
         Topic("kitting_trials/result", "std_msgs/String", "the campaign summary (JSON)", latched=True),
         Topic("kitting_trials/progress", "std_msgs/String", "trials done so far", latched=True),
     ),
@@ -186,6 +208,7 @@ KITTING_TRIALS = NodeInterface(
     calls=(
         Service("kitting_cell_sim/spawn", "kitting/SpawnPart", "feed a part"),
         Service("kitting_cell_sim/set_conditions", "kitting/SetCellConditions", "perturb the cell"),
+        Service("kitting_cell_sim/clear_tray", "std_srvs/Trigger", "swap the tray of a finished kit"),
     ),
 )
 

@@ -27,6 +27,12 @@ Evidence, never a silent success:
 - after the release, a part still on the magnet (part sensor) or seen on the belt after
   the lift is reported ``failed``.
 
+Kits: one part per slot. A slot released into is full until ``tray_swapped`` (the tray of
+the finished kit was taken away); parts whose slot is full are left on the belt. Of the
+parts that may be picked, the one that leaves the pick window soonest and can still be
+reached goes first (earliest deadline first); a part that can no longer be reached is
+``skipped``.
+
 Every path is checked before it is sent: no point of the tool's magnet may come closer
 than ``clearance`` to the belt or the tray except the grasp and release points themselves
 (``check_segment``). The descent duration is learned from the measured moves.
@@ -259,6 +265,7 @@ class KittingPicker:
         # keeps a Kalman update from interleaving with a plan reading the same track.
         self.lock = threading.Lock()
         self.recent = deque()  # (stamp, Observation) of the last 3 s: the miss check
+        self.filled: set[str] = set()  # slots released into since the last tray swap
         self.last_image = -math.inf  # stamp of the newest processed image, parts or not
 
     # -- perception --------------------------------------------------------------------------
@@ -300,8 +307,24 @@ class KittingPicker:
         return 2 * P["move_overhead"] + float(np.linalg.norm(hover - start)) / P["tool_speed"] + self.descent_time
 
     # -- the cycle ---------------------------------------------------------------------------
+    def tray_swapped(self):
+        """The finished kit's tray was taken away: every slot is free again."""
+        with self.lock:
+            self.filled.clear()
+
+    def _slot_free(self, class_name: str) -> bool:
+        return self.cell.tray.slot_for(class_name).part_class not in self.filled
+
+    def deadline(self, track: Track) -> float:
+        """When the part leaves the pick window (s, clock time; inf if it never does)."""
+        vx = track.velocity[0]
+        if vx <= 1e-9:
+            return math.inf
+        return track.t + (self.params["pick_window"][1] - track.position[0]) / vx
+
     def candidates(self) -> list[Track]:
-        """Confirmed tracks not done yet, nearest to leaving the pick window first."""
+        """Confirmed, freshly seen tracks not done yet whose slot is free, earliest
+        deadline (leaving the pick window) first."""
         oldest = self.clock() - self.params["max_pose_age"]
         with self.lock:
             out = [
@@ -310,32 +333,36 @@ class KittingPicker:
                 if t.hits >= self.params["min_hits"]
                 and t.last_seen >= oldest
                 and not self.records.get(t.track_id, _PartRecord()).done
+                and self._slot_free(t.class_name)
             ]
-        return sorted(out, key=lambda t: -t.position[0])
+        return sorted(out, key=self.deadline)
 
     def run_once(self) -> KittingEvent | None:
-        """Pick and place the next part if there is one; the final event, or None."""
-        candidates = self.candidates()  # the most downstream part first
-        if not candidates:
-            return None
-        track = candidates[0]
-        record = self.records.setdefault(track.track_id, _PartRecord())
-        now = self.clock()
-        start = self._face_now()
+        """Pick and place the next part if there is one; the final event, or None. Parts
+        that can no longer be reached are skipped on the way to the first that can."""
         x_min, x_max = self.params["pick_window"]
-        plan = plan_intercept(
-            track.position,
-            track.velocity,
-            track.t,
-            now,
-            lambda point: self.reach_time(start, point),
-            x_min,
-            x_max,
-            margin=self.params["plan_margin"],
-        )
-        if not plan.ok:
+        for track in self.candidates():
+            record = self.records.setdefault(track.track_id, _PartRecord())
+            now = self.clock()
+            start = self._face_now()
+            plan = plan_intercept(
+                track.position,
+                track.velocity,
+                track.t,
+                now,
+                lambda point, start=start: self.reach_time(start, point),
+                x_min,
+                x_max,
+                margin=self.params["plan_margin"],
+            )
+            if plan.ok:
+                return self._run_pick(track, record, plan)
             record.done = True
-            return self._emit(track, "skipped", plan.reason)
+            self._emit(track, "skipped", plan.reason)
+        return None
+
+    def _run_pick(self, track: Track, record: _PartRecord, plan) -> KittingEvent:
+        now = self.clock()
         record.attempts += 1
         started = now
         try:
@@ -472,6 +499,8 @@ class KittingPicker:
         self._move_l(release)
         self._gripper(False)
         self.holding = None
+        with self.lock:
+            self.filled.add(slot.part_class)  # whatever landed there, the slot is taken
         self._move_l(above)
         problem = "" if held else evidence
         if not problem and self.part_present() is True:
