@@ -17,6 +17,8 @@ class HandSample:
     provides it (-1 otherwise); ``device`` names the device that produced the frame.
     ``confidence``, ``grab_strength`` and ``pinch_strength`` are 0-1, or UNKNOWN (-1) when
     the device cannot tell; ``index_tip`` is the index finger tip (m) or None.
+    ``skeletons``: a ``SkeletonSample`` per hand whose whole skeleton the device saw
+    (published on ``motion_sensor/raw_hand_skeleton``; empty when it sees no fingers).
     """
 
     stamp: float
@@ -32,6 +34,7 @@ class HandSample:
     grab_strength: float = -1.0
     pinch_strength: float = -1.0
     index_tip: np.ndarray | None = None
+    skeletons: tuple = ()
 
     @property
     def primary_type(self) -> str:

@@ -12,11 +12,21 @@ from motion_common.params import Param, ParamSchema
 from motion_sensor.devices.device import HandDevice
 from motion_sensor.devices.device_interface import device_interface
 from motion_sensor.gestures.gesture_recognizer import RECOGNIZER_PARAMS
+from motion_sensor.gestures.skeleton_spotter import SKELETON_SPOTTER_PARAMS
 from motion_sensor.sequencing.sequencer import SEQUENCER_PARAMS
 
-__all__ = ["SEQUENCER", "GESTURE_RECOGNIZER", "RECORD_HANDS", "REGISTRATION_TF", "device_nodes", "all_interfaces"]
+__all__ = [
+    "SEQUENCER",
+    "GESTURE_RECOGNIZER",
+    "SKELETON_GESTURE_SPOTTER",
+    "RECORD_HANDS",
+    "REGISTRATION_TF",
+    "device_nodes",
+    "all_interfaces",
+]
 
 _HAND = "motion_sensor/hand"
+_SKELETON = "motion_sensor/HandSkeleton"
 
 SEQUENCER = NodeInterface(
     "motion_sensor",
@@ -36,9 +46,20 @@ SEQUENCER = NodeInterface(
         Topic("motion_sensor/active_device", "std_msgs/String", "the device that drives", latched=True),
         Topic("motion_sensor/filter", "std_msgs/String", "the active filter", latched=True),
         Topic("diagnostics", "diagnostic_msgs/DiagnosticArray", "counters by drop reason and latency, 1 Hz"),
+        Topic(
+            "motion_sensor/hand_skeleton",
+            _SKELETON,
+            "the skeletons whose palm frame passed (the same drop rules), device stamp kept",
+        ),
     ),
     subscribes=(
         Topic("~input", _HAND, "the device stream (when `~inputs` is unset)", optional=True),
+        Topic(
+            "motion_sensor/raw_hand_skeleton",
+            _SKELETON,
+            "the devices' skeletons, paired with their palm frames by stamp",
+            optional=True,
+        ),
         Topic(
             "motion_controller/trace",
             "motion_commander/CommandTrace",
@@ -55,6 +76,29 @@ GESTURE_RECOGNIZER = NodeInterface(
     RECOGNIZER_PARAMS,
     publishes=(Topic("motion_sensor/gesture", "motion_sensor/Gesture", "every recognised gesture, sensor stamp"),),
     subscribes=(Topic("motion_sensor/hand", _HAND, "the filtered hand stream"),),
+)
+
+SKELETON_GESTURE_SPOTTER = NodeInterface(
+    "motion_sensor",
+    "skeleton_gesture_spotter",
+    "Spots hand-skeleton gestures (the shipped ONNX model on sliding windows, idle gate, non-maximum "
+    "suppression, refractory period) in the sequenced skeleton stream; publishes each with its start and end.",
+    SKELETON_SPOTTER_PARAMS.merged(
+        ParamSchema(
+            [
+                Param("model", "", doc="ONNX model (empty: the shipped data/skeleton_gestures.onnx)"),
+                Param("hand", "", choices=("", "left", "right"), doc="follow only this hand (empty: the first seen)"),
+            ]
+        )
+    ),
+    publishes=(
+        Topic(
+            "motion_sensor/gesture",
+            "motion_sensor/Gesture",
+            "every spotted gesture: 14-class name, confidence, stamp = end, start and end",
+        ),
+    ),
+    subscribes=(Topic("motion_sensor/hand_skeleton", _SKELETON, "the sequenced skeleton stream"),),
 )
 
 RECORD_HANDS = NodeInterface(
@@ -107,6 +151,7 @@ def device_nodes():
     from motion_sensor.devices.kinect import FakenectKinectDevice
     from motion_sensor.devices.leap_client import LeapDevice
     from motion_sensor.devices.replay import ReplayDevice
+    from motion_sensor.devices.shrec_stream import ShrecStreamDevice
     from motion_sensor.devices.spacemouse import SpaceMouseDevice
     from motion_sensor.devices.webcam_device import WebcamHandDevice
 
@@ -144,10 +189,11 @@ def device_nodes():
         device_interface(DepthTopicDevice, "depth_hand_driver"),
         kinect,
         device_interface(ReplayDevice, "hand_replay"),
+        device_interface(ShrecStreamDevice, "shrec_stream_driver"),
         generic,
     ]
 
 
 def all_interfaces():
     """Every node of this package."""
-    return [SEQUENCER, GESTURE_RECOGNIZER, RECORD_HANDS, REGISTRATION_TF] + device_nodes()
+    return [SEQUENCER, GESTURE_RECOGNIZER, SKELETON_GESTURE_SPOTTER, RECORD_HANDS, REGISTRATION_TF] + device_nodes()

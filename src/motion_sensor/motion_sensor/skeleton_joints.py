@@ -14,16 +14,19 @@ operator, y left, z up), as ``hand.msg``.
 
 Where each device's joints go:
 
-- **SHREC'17 / DHG** (``shrec_to_canonical``): same order; the camera frame (x right,
-  y down, z away from the camera, the camera facing the operator) is turned into REP 103:
-  x = -z, y = x, z = -y.
-- **Leap Motion** (``leap_to_canonical``): per finger four bones (metacarpal, proximal,
-  intermediate, distal), each with a previous (proximal) and next (distal) joint. Finger
-  base = metacarpal's next joint (the knuckle), first joint = proximal's next, second
-  joint = intermediate's next, tip = distal's next. The thumb's metacarpal has zero
-  length in Leap's model, so the thumb base is the proximal bone's previous joint
-  (= the metacarpal's next joint, the same point). Wrist = the arm's wrist (or, without
-  it, the mean of the metacarpals' previous joints); palm = the palm position.
+- **SHREC'17 / DHG** (``shrec_to_canonical``): same order. The coordinates of the shared
+  training file are, as measured in it, x to the performer's right, y up and z away from
+  the camera (swipes up move the palm +y, swipes right +x, fingertips sit above the
+  wrist; its README's "y down" does not match the data), the frame of a Leap with the
+  camera in the Leap's place. They are turned into REP 103 as Leap's are: x = -z,
+  y = -x, z = y.
+- **Leap Motion** (``leap_to_canonical``): per finger the joints of its bones as the
+  v6 protocol gives them (``mcpPosition``, ``pipPosition``, ``dipPosition``,
+  ``tipPosition``): finger base = MCP, first joint = PIP, second joint = DIP, tip = tip
+  (for the thumb, whose metacarpal Leap models with zero length, the same fields give the
+  thumb's base, first and second joints and tip). Palm = the palm position. The v6
+  protocol has no wrist: it is placed behind the palm along the hand's direction, as far
+  from the palm as the middle finger's base is in front of it (``wrist`` overrides it).
 - **MediaPipe Hands** (``mediapipe_to_canonical``, 21 landmarks): 0 wrist; thumb
   1 CMC, 2 MCP, 3 IP, 4 tip; index 5 MCP, 6 PIP, 7 DIP, 8 tip; middle 9-12; ring
   13-16; pinky 17-20. Finger base = MCP, first = PIP, second = DIP, tip = tip; thumb
@@ -45,6 +48,7 @@ __all__ = [
     "leap_to_canonical",
     "mediapipe_to_canonical",
     "check_skeleton",
+    "palm_quaternion",
 ]
 
 FINGERS = ("thumb", "index", "middle", "ring", "pinky")
@@ -52,8 +56,9 @@ _PARTS = ("base", "first", "second", "tip")
 JOINT_NAMES = ("wrist", "palm") + tuple(f"{finger}_{part}" for finger in FINGERS for part in _PARTS)
 N_JOINTS = len(JOINT_NAMES)  # 22
 
-# Rows: REP 103 axes expressed in the SHREC camera axes (x right, y down, z away).
-SHREC_TO_REP103 = np.array([[0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+# Rows: REP 103 axes expressed in the SHREC file's axes (x performer's right, y up, z away
+# from the camera). A proper rotation (det = +1).
+SHREC_TO_REP103 = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 # MediaPipe landmark index of each canonical joint after the palm (2..21).
 _MEDIAPIPE_FINGERS = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20)
@@ -71,30 +76,31 @@ def check_skeleton(joints, source="skeleton"):
 
 
 def shrec_to_canonical(joints):
-    """SHREC'17 joints (..., 22, 3) in the camera frame -> REP 103 (same order, metres)."""
+    """SHREC'17 joints (..., 22, 3) in the file's frame -> REP 103 (same order, metres)."""
     array = np.asarray(joints, dtype=np.float64)
     if array.shape[-2:] != (N_JOINTS, 3):
         raise ValueError(f"SHREC joints: expected (..., {N_JOINTS}, 3), got shape {array.shape}")
     return array @ SHREC_TO_REP103.T
 
 
-def leap_to_canonical(palm, fingers, wrist=None):
-    """Leap joints -> canonical (22, 3).
+def leap_to_canonical(palm, direction, fingers, wrist=None):
+    """Leap joints -> canonical (22, 3), all in REP 103 metres.
 
-    ``palm``: (3,); ``fingers``: five fingers thumb to pinky, each four bones (metacarpal,
-    proximal, intermediate, distal), each a ``(prev_joint, next_joint)`` pair of 3-vectors,
-    already in REP 103 metres; ``wrist``: (3,) or None.
+    ``palm``: (3,); ``direction``: (3,) palm towards the fingers; ``fingers``: (5, 4, 3),
+    thumb to pinky, each MCP, PIP, DIP, tip; ``wrist``: (3,) or None (estimated).
     """
-    bones = np.asarray(fingers, dtype=float)
-    if bones.shape != (5, 4, 2, 3):
-        raise ValueError(f"Leap fingers: expected 5 fingers x 4 bones x (prev, next) x 3, got {bones.shape}")
+    joints = np.asarray(fingers, dtype=float)
+    if joints.shape != (5, 4, 3):
+        raise ValueError(f"Leap fingers: expected 5 fingers x (mcp, pip, dip, tip) x 3, got {joints.shape}")
+    palm = np.asarray(palm, dtype=float)
     out = np.empty((N_JOINTS, 3))
-    out[0] = np.mean(bones[1:, 0, 0], axis=0) if wrist is None else np.asarray(wrist, dtype=float)
-    out[1] = np.asarray(palm, dtype=float)
-    for f in range(5):
-        base = bones[f, 1, 0] if f == 0 else bones[f, 0, 1]
-        out[2 + 4 * f] = base
-        out[3 + 4 * f : 6 + 4 * f] = bones[f, 1:, 1]
+    if wrist is None:
+        heading = np.asarray(direction, dtype=float)
+        heading = heading / max(float(np.linalg.norm(heading)), 1e-9)
+        wrist = palm - heading * float(np.linalg.norm(joints[2, 0] - palm))
+    out[0] = wrist
+    out[1] = palm
+    out[2:] = joints.reshape(20, 3)
     return check_skeleton(out, "Leap skeleton")
 
 
@@ -108,3 +114,23 @@ def mediapipe_to_canonical(landmarks):
     out[1] = points[list(_MEDIAPIPE_PALM)].mean(axis=0)
     out[2:] = points[list(_MEDIAPIPE_FINGERS)]
     return check_skeleton(out, "MediaPipe skeleton")
+
+
+def palm_quaternion(joints):
+    """Palm orientation (x, y, z, w) of a canonical skeleton in its frame, as ``hand.msg``
+    defines it: x along the fingers (wrist to middle base), z out of the back of the hand,
+    y completing the frame. A right hand's thumb is on +y, a left hand's on -y; the back
+    of the hand is taken as the side that makes the frame right-handed with the thumb on
+    +y, so a left hand's z points out of its palm (it cannot be told without the side)."""
+    from scipy.spatial.transform import Rotation
+
+    points = check_skeleton(joints)
+    x = points[JOINT_NAMES.index("middle_base")] - points[0]
+    across = points[JOINT_NAMES.index("index_base")] - points[JOINT_NAMES.index("pinky_base")]
+    x = x / max(float(np.linalg.norm(x)), 1e-9)
+    y = across - x * float(np.dot(across, x))
+    norm = float(np.linalg.norm(y))
+    if norm < 1e-9:
+        return np.array([0.0, 0.0, 0.0, 1.0])
+    y = y / norm
+    return Rotation.from_matrix(np.column_stack([x, y, np.cross(x, y)])).as_quat()

@@ -163,6 +163,9 @@ class HandDevice(abc.ABC):
     # Extra latched std_msgs/Bool outputs: key -> topic; the device calls emit(key, value).
     bool_outputs: dict[str, str] = {}
     subscribes: tuple = ()  # motion_common.interface.Topic entries the node feeds the device from
+    # True: its samples carry whole-hand skeletons (HandSample.skeletons), which the node
+    # publishes on motion_sensor/raw_hand_skeleton.
+    publishes_skeletons: bool = False
 
     def __init__(
         self, config: dict, clock: Callable[[], float] = time.time, sleep: Callable[[float], object] = time.sleep

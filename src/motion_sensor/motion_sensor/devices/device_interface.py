@@ -11,7 +11,7 @@ import dataclasses
 from motion_common.interface import NodeInterface, Topic
 from motion_common.params import Param, ParamSchema
 
-__all__ = ["WRAPPER_PARAMS", "RAW_HAND", "SESSION_READY", "node_schema", "device_interface"]
+__all__ = ["WRAPPER_PARAMS", "RAW_HAND", "RAW_HAND_SKELETON", "SESSION_READY", "node_schema", "device_interface"]
 
 WRAPPER_PARAMS = ParamSchema(
     [
@@ -43,6 +43,11 @@ WRAPPER_PARAMS = ParamSchema(
 )
 
 RAW_HAND = Topic("motion_sensor/raw_hand", "motion_sensor/hand", "the device's hand frames, stamped at capture")
+RAW_HAND_SKELETON = Topic(
+    "motion_sensor/raw_hand_skeleton",
+    "motion_sensor/HandSkeleton",
+    "the whole skeleton of each hand seen (canonical 22 joints), same stamp as the frame's raw_hand",
+)
 SESSION_READY = Topic(
     "session_ready", "std_msgs/Bool", "streaming starts once True arrives (wait_for_ready)", optional=True
 )
@@ -66,6 +71,8 @@ def node_schema(device_cls) -> ParamSchema:
 def device_interface(device_cls, node: str, doc: str = "") -> NodeInterface:
     """The declaration of the node that runs ``device_cls``."""
     publishes = [RAW_HAND, _DIAGNOSTICS]
+    if getattr(device_cls, "publishes_skeletons", False):
+        publishes.append(RAW_HAND_SKELETON)
     publishes += [
         Topic(name, "std_msgs/Bool", f"the device's {key} output", latched=True)
         for key, name in sorted(device_cls.bool_outputs.items())

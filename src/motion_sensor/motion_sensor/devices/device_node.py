@@ -26,7 +26,7 @@ from motion_common.startup_heap import freeze_startup_heap
 from motion_sensor.devices.device import Backoff, DeviceRunner, HandDevice, wait_until_ready
 from motion_sensor.devices.device_interface import WRAPPER_PARAMS, device_interface, node_schema  # noqa: F401 (re-export)
 from motion_sensor.errors import MotionSensorError
-from motion_sensor.ros_conversions import sample_to_msg
+from motion_sensor.ros_conversions import sample_to_msg, skeleton_to_msg
 
 
 class DeviceNode:
@@ -49,6 +49,9 @@ class DeviceNode:
         self.publisher = publisher(
             self.interface, "motion_sensor/raw_hand", queue_size=self.config["queue_size"] or None, tcp_nodelay=True
         )
+        self.skeleton_publisher = None
+        if device_cls.publishes_skeletons:
+            self.skeleton_publisher = publisher(self.interface, "motion_sensor/raw_hand_skeleton", queue_size=10)
         self.bool_pubs = {
             key: publisher(self.interface, topic, queue_size=1) for key, topic in device_cls.bool_outputs.items()
         }
@@ -83,6 +86,13 @@ class DeviceNode:
         msg = sample_to_msg(sample)
         msg.header.stamp = rospy.Time.now() if self.device.stamp_on_publish else rospy.Time.from_sec(sample.stamp)
         self.publisher.publish(msg)
+        if self.skeleton_publisher is not None:
+            # After the palm frame, with its stamp: the sequencer pairs the two by stamp.
+            for skeleton in sample.skeletons:
+                if skeleton.problem() is None:
+                    self.skeleton_publisher.publish(skeleton_to_msg(skeleton, msg.header))
+                else:
+                    self.device.counters["invalid_skeletons"] += 1
 
     def wait_until_ready(self) -> bool:
         """Block until the session is ready to receive the stream."""

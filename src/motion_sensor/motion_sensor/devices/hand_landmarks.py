@@ -183,7 +183,9 @@ def pinch_strength(world: np.ndarray, thresholds: GestureThresholds = GestureThr
 @dataclass
 class PalmPose:
     """A hand's pose in the device frame (REP 103 axes, m): palm centre, unit quaternion
-    (x, y, z, w), index tip; plus the gesture strengths and the raw (uncalibrated) depth."""
+    (x, y, z, w), index tip; plus the gesture strengths, the raw (uncalibrated) depth and
+    all 21 landmarks placed the same way (``landmarks`` (21, 3), metric as far as the depth
+    estimate is; ``motion_sensor.skeleton_joints.mediapipe_to_canonical`` maps them)."""
 
     position: np.ndarray
     orientation: np.ndarray
@@ -191,6 +193,7 @@ class PalmPose:
     grab_strength: float
     pinch_strength: float
     raw_depth: float
+    landmarks: np.ndarray | None = None
 
 
 def palm_pose(
@@ -222,6 +225,7 @@ def palm_pose(
         grab_strength=grab_strength(world, thresholds),
         pinch_strength=pinch_strength(world, thresholds),
         raw_depth=raw_depth,
+        landmarks=(depth_scale * (translation + world)) @ OPTICAL_TO_REP103.T,
     )
 
 

@@ -185,6 +185,7 @@ class LeapDevice(HandDevice):
     the device's capture time mapped onto the local clock."""
 
     name = "leap"
+    publishes_skeletons = True  # whole-hand skeletons on motion_sensor/raw_hand_skeleton
     default_frame_id = "leap"
     params = ParamSchema(
         [

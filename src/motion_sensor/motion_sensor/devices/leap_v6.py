@@ -16,6 +16,8 @@ from scipy.spatial.transform import Rotation
 
 from motion_sensor.errors import MotionSensorError
 from motion_sensor.hand_sample import HandSample
+from motion_sensor.skeleton_joints import leap_to_canonical
+from motion_sensor.skeleton_sample import SkeletonSample
 
 # Rows map Leap (x right, y up, z toward operator) to REP 103 (x forward, y left, z up):
 # forward = -z_leap, left = -x_leap, up = y_leap. A proper rotation (det = +1).
@@ -38,6 +40,8 @@ class LeapHand:
     grab_strength: float = -1.0  # 0 open .. 1 fist; -1 when the frame lacks it
     pinch_strength: float = -1.0  # 0 apart .. 1 touching; -1 when the frame lacks it
     index_tip: np.ndarray | None = None  # m, REP 103; from the frame's pointables
+    skeleton: np.ndarray | None = None  # (22, 3) canonical joints (motion_sensor.skeleton_joints), m, REP 103
+    direction: np.ndarray | None = None  # palm towards the fingers, unit, REP 103
 
 
 @dataclass
@@ -113,6 +117,37 @@ def index_tips(pointables) -> dict:
     return tips
 
 
+_FINGER_JOINTS = ("mcpPosition", "pipPosition", "dipPosition", "tipPosition")
+
+
+def hand_skeletons(pointables, hands) -> dict:
+    """{hand id: canonical (22, 3) skeleton} of the hands whose five fingers all have their
+    four joints in the frame's pointables (``skeleton_joints.leap_to_canonical``); a hand
+    with a missing or malformed finger gets none (the palm stream never depends on it)."""
+    fingers = {}
+    if not isinstance(pointables, list):
+        return {}
+    for pointable in pointables:
+        if not isinstance(pointable, dict) or pointable.get("type") not in range(5):
+            continue
+        try:
+            joints = [_vector(pointable, key) for key in _FINGER_JOINTS]
+        except MotionSensorError:
+            continue
+        fingers.setdefault(pointable.get("handId"), {})[pointable["type"]] = np.array(joints)
+    skeletons = {}
+    for hand in hands:
+        found = fingers.get(hand.hand_id, {})
+        if len(found) != 5 or hand.direction is None:
+            continue
+        leap = np.stack([found[f] for f in range(5)])  # (5, 4, 3) mm, Leap axes
+        try:
+            skeletons[hand.hand_id] = leap_to_canonical(hand.position, hand.direction, leap @ LEAP_TO_REP103.T / 1000.0)
+        except ValueError:
+            continue
+    return skeletons
+
+
 def parse_hand(hand: dict) -> LeapHand:
     """Convert one Leap v6 hand object; raise MotionSensorError naming the bad field."""
     if not isinstance(hand, dict):
@@ -128,6 +163,8 @@ def parse_hand(hand: dict) -> LeapHand:
         raise MotionSensorError(f"hand field 'confidence' must be a finite number, got {confidence!r:.40}")
     position = LEAP_TO_REP103 @ _vector(hand, "palmPosition") / 1000.0
     orientation = palm_orientation(_vector(hand, "palmNormal"), _vector(hand, "direction"))
+    direction = LEAP_TO_REP103 @ _vector(hand, "direction")
+    direction = direction / max(float(np.linalg.norm(direction)), 1e-9)
     stabilized = None
     if "stabilizedPalmPosition" in hand:
         stabilized = LEAP_TO_REP103 @ _vector(hand, "stabilizedPalmPosition") / 1000.0
@@ -140,6 +177,7 @@ def parse_hand(hand: dict) -> LeapHand:
         stabilized,
         _strength(hand, "grabStrength"),
         _strength(hand, "pinchStrength"),
+        direction=direction,
     )
 
 
@@ -173,8 +211,10 @@ def parse_message(text, max_bytes: int = MAX_MESSAGE_BYTES) -> LeapFrame | None:
         raise MotionSensorError(f"frame field 'id' must be an integer, got {frame_id!r:.40}")
     parsed = [parse_hand(h) for h in hands]
     tips = index_tips(obj.get("pointables"))
+    skeletons = hand_skeletons(obj.get("pointables"), parsed)
     for leap_hand in parsed:
         leap_hand.index_tip = tips.get(leap_hand.hand_id)
+        leap_hand.skeleton = skeletons.get(leap_hand.hand_id)
     return LeapFrame(frame_id, timestamp * 1e-6, parsed)
 
 
@@ -223,6 +263,11 @@ def frame_to_sample(
         grab_strength=primary.grab_strength,
         pinch_strength=primary.pinch_strength,
         index_tip=primary.index_tip,
+        skeletons=tuple(
+            SkeletonSample(stamp, h.skeleton, h.hand_type, h.hand_id, h.confidence, frame_id, "leap")
+            for h in [primary] + [h for h in frame.hands if h is not primary]
+            if h.skeleton is not None
+        ),
     )
 
 

@@ -126,6 +126,7 @@ class ReplayDevice(HandDevice):
     or finite (EndOfStream at the end: the node reports ~finished and exits)."""
 
     name = "replay"
+    publishes_skeletons = True  # whole-hand skeletons on motion_sensor/raw_hand_skeleton
     default_frame_id = "leap"
     finite = True
     stamp_on_publish = True

@@ -52,6 +52,7 @@ class WebcamHandDevice(HandDevice):
     """A webcam or a video file, hands found by a detector (MediaPipe Hands by default)."""
 
     name = "webcam"
+    publishes_skeletons = True  # whole-hand skeletons on motion_sensor/raw_hand_skeleton
     default_frame_id = "webcam"
     finite = True  # a video file ends (EndOfStream); a camera never does
     params = ParamSchema(

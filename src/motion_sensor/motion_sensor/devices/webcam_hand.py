@@ -16,6 +16,8 @@ from motion_sensor.devices.device import empty_sample
 from motion_sensor.devices.hand_landmarks import GestureThresholds, landmark_problem, palm_pose
 from motion_sensor.devices.mediapipe_hands import HandDetector
 from motion_sensor.hand_sample import HandSample
+from motion_sensor.skeleton_joints import mediapipe_to_canonical
+from motion_sensor.skeleton_sample import SkeletonSample
 
 
 @dataclass(frozen=True)
@@ -140,4 +142,15 @@ class WebcamHandTracker:
             grab_strength=pose.grab_strength,
             pinch_strength=pose.pinch_strength,
             index_tip=pose.index_tip,
+            skeletons=(
+                SkeletonSample(
+                    stamp,
+                    mediapipe_to_canonical(pose.landmarks),
+                    primary.handedness,
+                    self._hand_id,
+                    float(np.clip(primary.score, 0.0, 1.0)),
+                    self.frame_id,
+                    "webcam",
+                ),
+            ),
         )

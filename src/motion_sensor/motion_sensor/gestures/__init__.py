@@ -15,7 +15,8 @@ Its modules:
 - ``skeleton_classifier``: the shipped skeleton model through onnxruntime;
 - ``skeleton_network``: the network in torch (training only);
 - ``skeleton_training``: training, augmentation and ONNX export (torch, training only);
-- ``train_skeleton_gestures``: the training command (user-independent estimate, export).
+- ``train_skeleton_gestures``: the training command (user-independent estimate, export);
+- ``skeleton_eval``: ``gesture_eval --skeleton``, the shipped model on a .npz.
 """
 
 from motion_common.lazy_exports import lazy_exports

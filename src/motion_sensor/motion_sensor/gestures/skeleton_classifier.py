@@ -15,7 +15,7 @@ import numpy as np
 
 from motion_sensor.errors import MotionSensorError
 from motion_sensor.gestures.skeleton_dataset import CLASSES_14, CLASSES_28
-from motion_sensor.gestures.skeleton_features import batch_features
+from motion_sensor.gestures.skeleton_features import batch_features, to_model_frame
 
 __all__ = ["DEFAULT_MODEL", "SkeletonResult", "SkeletonClassifier"]
 
@@ -74,7 +74,7 @@ class SkeletonClassifier:
 
     def classify_batch(self, sequences):
         """Results of several sequences (one onnxruntime run)."""
-        jcd, slow, fast = batch_features(sequences)
+        jcd, slow, fast = batch_features([to_model_frame(s) for s in sequences])
         prob14, prob28 = self._session.run(["prob14", "prob28"], {"jcd": jcd, "slow": slow, "fast": fast})
         folded = prob28.reshape(len(prob28), 14, 2).sum(axis=2)
         prob14 = 0.5 * (prob14 + folded)

@@ -11,20 +11,39 @@ REP 103) is resampled to a fixed ``FRAMES`` frames (linear interpolation in time
 - ``fast`` (FRAMES // 2, 66): global motion at twice the scale, the displacements
   between every other frame.
 
-The three arrays are the inputs of the skeleton network (``skeleton_classifier``). No
-ROS, no torch.
+The three arrays are the inputs of the skeleton network (``skeleton_classifier``).
+
+The network's input frame is REP 103 turned half a turn about x (``MODEL_FROM_REP103``:
+y and z negated), the frame the shipped model was trained in; ``to_model_frame`` turns a
+canonical sequence into it, and the classifier and the training both call it, so callers
+always pass REP 103. No ROS, no torch.
 """
 
 import numpy as np
 
 from motion_sensor.skeleton_joints import N_JOINTS
 
-__all__ = ["FRAMES", "JCD_SIZE", "MOTION_SIZE", "resample", "skeleton_features", "batch_features"]
+__all__ = [
+    "FRAMES",
+    "JCD_SIZE",
+    "MOTION_SIZE",
+    "MODEL_FROM_REP103",
+    "to_model_frame",
+    "resample",
+    "skeleton_features",
+    "batch_features",
+]
 
 FRAMES = 32
 JCD_SIZE = N_JOINTS * (N_JOINTS - 1) // 2  # 231
 MOTION_SIZE = N_JOINTS * 3  # 66
 _UPPER = np.triu_indices(N_JOINTS, k=1)
+MODEL_FROM_REP103 = np.diag([1.0, -1.0, -1.0])
+
+
+def to_model_frame(sequence):
+    """A canonical (REP 103) sequence (..., 22, 3) in the network's input frame."""
+    return np.asarray(sequence, dtype=np.float64) @ MODEL_FROM_REP103.T
 
 
 def resample(sequence, frames=FRAMES, positions=None):

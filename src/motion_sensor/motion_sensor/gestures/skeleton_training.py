@@ -5,7 +5,8 @@ runtime reads the exported model with onnxruntime (``skeleton_classifier``).
 Reproducible: numpy and torch are seeded from ``TrainConfig.seed`` and torch runs
 deterministic kernels on ``threads`` threads (1 by default: the machine is shared).
 
-Augmentation, drawn per sequence and epoch: a rotation (up to ``rotate_deg`` about the
+Sequences are turned into the network's input frame (``skeleton_features.to_model_frame``)
+before anything else. Augmentation, drawn per sequence and epoch: a rotation (up to ``rotate_deg`` about the
 vertical axis, a third of it about the two others), a scale, Gaussian joint noise and a
 time warp (a random crop of up to ``crop`` of the sequence at each end and a smooth
 non-uniform speed).
@@ -18,7 +19,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from motion_sensor.gestures.skeleton_features import FRAMES, batch_features, skeleton_features
+from motion_sensor.gestures.skeleton_features import FRAMES, batch_features, skeleton_features, to_model_frame
 
 __all__ = ["TrainConfig", "augment", "train_model", "predict", "export_onnx", "fold_28_to_14"]
 
@@ -97,9 +98,10 @@ def train_model(dataset, config=None, log=None):
     y14 = torch.as_tensor(dataset.label14)
     y28 = torch.as_tensor(dataset.label28)
     started = time.monotonic()
+    inputs = [to_model_frame(s) for s in dataset.sequences]
     for epoch in range(config.epochs):
         model.train()
-        sequences, positions = zip(*(augment(s, rng, config) for s in dataset.sequences), strict=True)
+        sequences, positions = zip(*(augment(s, rng, config) for s in inputs), strict=True)
         jcd, slow, fast = (torch.as_tensor(a) for a in batch_features(sequences, positions))
         order = torch.as_tensor(rng.permutation(len(dataset)))
         total = 0.0
@@ -134,7 +136,7 @@ def predict(model, sequences):
     with the 28-class head folded onto the gestures (what ``skeleton_classifier`` does)."""
     import torch
 
-    jcd, slow, fast = (torch.as_tensor(a) for a in batch_features(sequences))
+    jcd, slow, fast = (torch.as_tensor(a) for a in batch_features([to_model_frame(s) for s in sequences]))
     with torch.no_grad():
         out14, out28 = model(jcd, slow, fast)
     prob14 = torch.softmax(out14, dim=1).numpy()

@@ -39,8 +39,10 @@ def subject_folds(subjects, folds):
     return {int(s): i % folds for i, s in enumerate(sorted({int(s) for s in subjects}))}
 
 
-def holdout_estimate(dataset, config, folds, eval_folds, log=None):
-    """Pooled accuracy (14 and 28 classes) over the held-out groups, and the details."""
+def holdout_estimate(dataset, config, folds, eval_folds, log=None, fold_models=None):
+    """Pooled accuracy (14 and 28 classes) over the held-out groups, and the details;
+    with ``fold_models`` (a folder) each fold's model is exported there as
+    ``fold<k>.onnx`` (the spotting benchmark runs it on its held-out subjects)."""
     groups = subject_folds(dataset.subject, folds)
     group_of = np.array([groups[int(s)] for s in dataset.subject])
     right14 = right28 = count = 0
@@ -66,6 +68,10 @@ def holdout_estimate(dataset, config, folds, eval_folds, log=None):
                 "train_s": round(time.monotonic() - started, 1),
             }
         )
+        if fold_models:
+            os.makedirs(fold_models, exist_ok=True)
+            held_subjects = details[-1]["held_out_subjects"]
+            export_onnx(model, os.path.join(fold_models, f"fold{fold}.onnx"), {"held_out_subjects": held_subjects})
         if log:
             log(f"fold {fold}: {details[-1]}")
     return {"accuracy14": round(right14 / count, 4), "accuracy28": round(right28 / count, 4), "n_test": count}, details
@@ -83,6 +89,7 @@ def parse_args(argv=None):
     parser.add_argument(
         "--eval-folds", type=int, nargs="*", default=[], help="groups held out one at a time for the estimate"
     )
+    parser.add_argument("--fold-models", metavar="DIR", help="also export each held-out fold's model here")
     defaults = TrainConfig()
     for name, value in defaults.as_dict().items():
         parser.add_argument(f"--{name.replace('_', '-')}", type=type(value), default=value, help="(%(default)s)")
@@ -103,7 +110,7 @@ def main(argv=None):
     log(f"{len(dataset)} sequences, {len(set(dataset.subject.tolist()))} subjects; settings {config.as_dict()}")
     report = {"data": os.path.basename(args.data), "config": config.as_dict(), "folds": args.folds}
     if args.eval_folds:
-        estimate, details = holdout_estimate(dataset, config, args.folds, args.eval_folds, log)
+        estimate, details = holdout_estimate(dataset, config, args.folds, args.eval_folds, log, args.fold_models)
         report.update(estimate=estimate, held_out=details)
         log(f"user-independent estimate: {estimate}")
     if args.out:
