@@ -5,10 +5,11 @@ chosen driver's own parameters (``driver_params``) are declared by the driver cl
 """
 
 from motion_common.interface import NodeInterface, Service, Topic
+from motion_common.params import Param, ParamSchema
 
 from .server_params import SERVER_PARAMETERS
 
-__all__ = ["MOTION_CONTROLLER_SERVER", "all_interfaces"]
+__all__ = ["MOTION_CONTROLLER_SERVER", "SCENE_CAMERA", "all_interfaces"]
 
 _BOOL = "std_msgs/Bool"
 
@@ -54,6 +55,32 @@ MOTION_CONTROLLER_SERVER = NodeInterface(
 )
 
 
+SCENE_CAMERA = NodeInterface(
+    "hw_interface",
+    "scene_camera",
+    "A camera looking at the simulated cell, rendered in its own process from a mirror of the robot's joints "
+    "and the server's scene bodies (hw_interface.scene_camera).",
+    ParamSchema(
+        [
+            Param("urdf", "", doc="robot URDF (required)"),
+            Param("scene", "", doc="scene YAML of the simulated cell (its 'scene' list; empty: the robot alone)"),
+            Param("rate", 15.0, "Hz", "images per second (at most what the renderer manages)", low=0.1, high=60.0),
+            Param("width", 320, "px", "image width", low=16, high=1920),
+            Param("height", 240, "px", "image height", low=16, high=1080),
+            Param("eye", [0.5, -0.9, 0.75], "m", "camera position, base frame"),
+            Param("target", [-0.4, -0.1, 0.2], "m", "point the camera looks at, base frame"),
+            Param("fov_deg", 55.0, "deg", "vertical field of view", low=1.0, high=170.0),
+            Param("frame_id", "scene_camera", doc="header.frame_id of the images"),
+        ]
+    ),
+    publishes=(Topic("camera/image_raw", "sensor_msgs/Image", "the rendered images (rgb8)"),),
+    subscribes=(
+        Topic("joint_states", "sensor_msgs/JointState", "the measured joints"),
+        Topic("tf", "tf2_msgs/TFMessage", "the server's scene bodies (frames scene/<name>)"),
+    ),
+)
+
+
 def all_interfaces():
     """Every node of this package."""
-    return [MOTION_CONTROLLER_SERVER]
+    return [MOTION_CONTROLLER_SERVER, SCENE_CAMERA]

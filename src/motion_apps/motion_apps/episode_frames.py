@@ -18,15 +18,16 @@ LeRobot features (float32 unless said):
 
 A frame is made at each tick of the recorder's clock from the newest value of every
 stream, so all frames are ``1 / fps`` apart (LeRobot's timestamps are ``index / fps``). A
-camera image that is not new since the previous frame is counted as repeated (``camera``
-counts in the episode's record), so a camera slower than ``fps`` shows as a loss.
+camera image that is not new since the previous frame is counted as repeated, and a frame
+before the camera's first image (black) as missing (``camera`` counts in the episode's
+record), so a camera slower than ``fps``, or late, shows as a loss.
 """
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["EpisodeFrames", "FrameCounts", "HAND_NAMES", "POSE_NAMES", "camera_key"]
+__all__ = ["EpisodeFrames", "FrameCounts", "HAND_NAMES", "POSE_NAMES", "camera_key", "rgb_from_image"]
 
 POSE_NAMES = ["x", "y", "z", "qx", "qy", "qz", "qw"]
 HAND_NAMES = ["palm_x", "palm_y", "palm_z", "palm_qx", "palm_qy", "palm_qz", "palm_qw", "grab", "pinch", "visible"]
@@ -36,6 +37,23 @@ def camera_key(name: str) -> str:
     return f"observation.images.{name}"
 
 
+def rgb_from_image(encoding: str, height: int, width: int, step: int, data: bytes) -> np.ndarray:
+    """HxWx3 uint8 RGB from a sensor_msgs/Image's fields (rgb8, bgr8, mono8); ValueError
+    naming what does not add up otherwise."""
+    channels = {"rgb8": 3, "bgr8": 3, "mono8": 1}.get(encoding)
+    if channels is None:
+        raise ValueError(f"image encoding {encoding!r} (rgb8, bgr8 or mono8 expected)")
+    if step < width * channels or len(data) < step * height:
+        raise ValueError(f"image {width}x{height} {encoding}: step {step}, {len(data)} bytes do not add up")
+    rows = np.frombuffer(data, dtype=np.uint8, count=step * height).reshape(height, step)
+    pixels = rows[:, : width * channels].reshape(height, width, channels)
+    if encoding == "bgr8":
+        return np.ascontiguousarray(pixels[:, :, ::-1])
+    if encoding == "mono8":
+        return np.repeat(pixels, 3, axis=2)
+    return pixels.copy()
+
+
 @dataclass
 class FrameCounts:
     """Per-episode counts the recorder reports in the episode's record."""
@@ -43,6 +61,7 @@ class FrameCounts:
     frames: int = 0
     camera_new: int = 0
     camera_repeated: int = 0
+    camera_missing: int = 0
     skipped_not_ready: int = 0
     extra: dict = field(default_factory=dict)
 
@@ -51,6 +70,7 @@ class FrameCounts:
             "frames_sampled": self.frames,
             "camera_new_frames": self.camera_new,
             "camera_repeated_frames": self.camera_repeated,
+            "camera_missing_frames": self.camera_missing,
             "ticks_without_state": self.skipped_not_ready,
             **self.extra,
         }
@@ -119,9 +139,10 @@ class EpisodeFrames:
 
     # -- outputs ------------------------------------------------------------------------
     def missing(self) -> list:
-        """The streams a frame still needs."""
+        """The streams a frame still needs (a camera with a set image size is not waited
+        for: its frames are black, and counted, until the first image)."""
         need = [("joint_states", self.joints), ("tool pose", self.tool)]
-        if self.camera:
+        if self.camera and not all(self.image_size):
             need.append((f"camera {self.camera}", self.image))
         return [name for name, value in need if value is None]
 
@@ -140,7 +161,7 @@ class EpisodeFrames:
             "action.tool_target": {"dtype": "float32", "shape": [7], "names": POSE_NAMES},
         }
         if self.camera:
-            h, w = self.image.shape[:2]
+            h, w = self.image.shape[:2] if self.image is not None else self.image_size[::-1]
             out[camera_key(self.camera)] = {
                 "dtype": "video",
                 "shape": [h, w, 3],
@@ -168,11 +189,16 @@ class EpisodeFrames:
             "action.tool_target": (self.target if self.target is not None else self.tool).copy(),
         }
         if self.camera:
-            frame[camera_key(self.camera)] = self.image
-            if self._image_serial != self._sampled_serial:
-                self.counts.camera_new += 1
+            if self.image is None:
+                width, height = self.image_size
+                frame[camera_key(self.camera)] = np.zeros((height, width, 3), np.uint8)
+                self.counts.camera_missing += 1
             else:
-                self.counts.camera_repeated += 1
+                frame[camera_key(self.camera)] = self.image
+                if self._image_serial != self._sampled_serial:
+                    self.counts.camera_new += 1
+                else:
+                    self.counts.camera_repeated += 1
             self._sampled_serial = self._image_serial
         self.counts.frames += 1
         return frame

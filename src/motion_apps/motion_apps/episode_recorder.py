@@ -141,7 +141,7 @@ class EpisodeRecorder:
         if self.frames.camera:
             sampled = max(counts.frames, 1)
             info["camera"] = self.frames.camera
-            info["camera_loss_fraction"] = round(counts.camera_repeated / sampled, 4)
+            info["camera_loss_fraction"] = round((counts.camera_repeated + counts.camera_missing) / sampled, 4)
         try:
             reply = self.writer.command("save", success=self.success, info=info)
         except Exception as exc:  # noqa: BLE001

@@ -10,12 +10,22 @@ from motion_common.params import Param, ParamSchema
 
 from .teach import DEFAULT_PROGRAMS_DIR
 
-__all__ = ["TEACH_MODE", "TEACH_DEMO", "RUN_PROGRAM", "PROJECT_PROGRAMS_DIR", "all_interfaces"]
+__all__ = [
+    "TEACH_MODE",
+    "TEACH_DEMO",
+    "RUN_PROGRAM",
+    "EPISODE_RECORDER",
+    "REPLAY_EPISODE",
+    "PROJECT_PROGRAMS_DIR",
+    "PROJECT_DATASETS_DIR",
+    "all_interfaces",
+]
 
 # The project's output/programs wherever roslaunch runs the node from (its cwd is ROS_HOME):
 # this file is <project>/src/motion_apps/motion_apps/interfaces.py.
 PROJECT_ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", ".."))
 PROJECT_PROGRAMS_DIR = os.path.join(PROJECT_ROOT, DEFAULT_PROGRAMS_DIR)
+PROJECT_DATASETS_DIR = os.path.join(PROJECT_ROOT, "output", "datasets")
 
 _POSE = "geometry_msgs/PoseStamped"
 _GESTURE = Topic("motion_sensor/gesture", "motion_sensor/Gesture", "recognised gestures")
@@ -104,6 +114,89 @@ RUN_PROGRAM = NodeInterface(
 )
 
 
+EPISODE_RECORDER = NodeInterface(
+    "motion_apps",
+    "episode_recorder",
+    "Records demonstrations as episodes of a LeRobot dataset (observations at a fixed rate, camera as video, "
+    "the core's commands as actions, task text, success), written by LeRobot's own writer in a process of its "
+    "own; started and stopped by service, topic, the dashboard or a gesture.",
+    ParamSchema(
+        [
+            Param(
+                "dataset",
+                os.path.join(PROJECT_DATASETS_DIR, "teleop"),
+                doc="dataset folder (a LeRobot root; a relative path is taken from the project root)",
+            ),
+            Param("repo_id", "local/teleop", doc="LeRobot repo_id written into the dataset (never pushed)"),
+            Param("task", "teleoperation", doc="task text of the episodes (episodes/task changes it)"),
+            Param("fps", 15.0, "Hz", "frame rate of the episodes", low=1.0, high=60.0),
+            Param("camera", "", doc="camera name (observation.images.<camera>) of camera/image_raw; empty: no camera"),
+            Param("image_width", 320, "px", "camera frames are resized to this width (0: as received)", low=0),
+            Param("image_height", 240, "px", "camera frames are resized to this height (0: as received)", low=0),
+            Param(
+                "max_episode_s",
+                600.0,
+                "s",
+                "an episode this long is saved and recording stops (bounds memory)",
+                low=1.0,
+            ),
+            Param("min_free_mb", 500.0, "MB", "free disk the dataset folder needs at start-up", low=0.0),
+            Param("toggle_gesture", "", doc="gesture that starts and stops an episode (empty: none)"),
+            Param("robot_type", "", doc="robot_type written into the dataset (empty: the joint_states' arm)"),
+            Param(
+                "vcodec",
+                "h264",
+                doc="video codec of the camera stream (LeRobot's: h264, hevc, libsvtav1)",
+                choices=("h264", "hevc", "libsvtav1"),
+            ),
+            Param("start_recording", False, doc="start an episode as soon as the robot state is there"),
+        ]
+    ),
+    publishes=(
+        Topic(
+            "episodes/status", "std_msgs/String", "recording state as JSON (episode, frames, last result)", latched=True
+        ),
+        Topic(
+            "episodes/list",
+            "std_msgs/String",
+            "the saved episodes as JSON (index, task, frames, success)",
+            latched=True,
+        ),
+    ),
+    subscribes=(
+        _JOINTS,
+        Topic("motion_controller/tool_pose", _POSE, "the measured tool pose"),
+        Topic("motion_controller/gripper", "std_msgs/Bool", "the gripper state"),
+        Topic("motion_sensor/hand", "motion_sensor/hand", "the operator's hand"),
+        Topic("motion_commander/command", "sensor_msgs/JointState", "the joint targets sent (the action)"),
+        Topic("motion_commander/target", _POSE, "the core's tool target"),
+        Topic("camera/image_raw", "sensor_msgs/Image", "the camera (with ~camera)", optional=True),
+        Topic("episodes/task", "std_msgs/String", "task text of the next episodes"),
+        Topic("episodes/command", "std_msgs/String", "start, stop, discard, success, failure (for scripts)"),
+        Topic(
+            "motion_sensor/gesture",
+            "motion_sensor/Gesture",
+            "the start/stop gesture (with ~toggle_gesture)",
+            optional=True,
+        ),
+    ),
+    serves=(
+        Service("episodes/start", "std_srvs/Trigger", "start an episode"),
+        Service("episodes/stop", "std_srvs/Trigger", "save the episode"),
+        Service("episodes/discard", "std_srvs/Trigger", "drop the episode"),
+        Service("episodes/mark_success", "std_srvs/SetBool", "success of the episode (the last saved one when none)"),
+    ),
+)
+
+REPLAY_EPISODE = NodeInterface(
+    "motion_apps",
+    "replay_episode",
+    "Command-line replay of a recorded episode's actions through the server's safety checks, reporting the "
+    "tracking error against the recorded states (anonymous node; arguments on the command line, see --help).",
+    calls=(_SERVER,),
+)
+
+
 def all_interfaces():
     """Every node of this package."""
-    return [TEACH_MODE, TEACH_DEMO, RUN_PROGRAM]
+    return [TEACH_MODE, TEACH_DEMO, RUN_PROGRAM, EPISODE_RECORDER, REPLAY_EPISODE]

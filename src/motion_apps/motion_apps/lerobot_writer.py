@@ -13,7 +13,8 @@ venv), started by ``episode_writer_client`` as ``python lerobot_writer.py`` with
 - ``save``: ``success`` and ``info`` (the recorder's counts) -> ``saved``: LeRobot writes the
   episode into the staging copy, the framework's record goes into
   ``meta/teleop_episodes.json``, and the copy becomes the dataset (atomic);
-- ``discard`` -> ``discarded``; ``mark``: ``episode_index``, ``success`` -> ``marked``;
+- ``discard`` -> ``discarded``; ``mark``: ``episode_index``, ``success`` (and ``root``
+  when nothing was opened) -> ``marked``;
 - end of stdin: an episode in progress is discarded, and the process ends.
 
 A bad message or a LeRobot error is answered with ``error`` (its reason) and the episode in
@@ -175,6 +176,8 @@ class Writer:
         return {}
 
     def mark(self, header: dict) -> dict:
+        if self.store is None and header.get("root"):
+            self.store = DatasetStore(header["root"])  # marking needs no features: no open
         current = self.store.current() if self.store else None
         if current is None:
             raise RuntimeError("no saved episode to mark")

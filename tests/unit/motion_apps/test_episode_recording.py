@@ -147,9 +147,10 @@ def test_folder_check_names_unwritable_folders_and_full_disks(tmp_path, monkeypa
 
 # -- frames -----------------------------------------------------------------------------
 def test_frames_wait_for_state_and_count_repeated_camera_images():
-    frames = EpisodeFrames(camera="scene", image_size=(8, 6))
+    frames = EpisodeFrames(camera="scene")  # size unknown until the first image: waited for
     assert frames.sample() is None and frames.counts.skipped_not_ready == 1
     assert frames.missing() == ["joint_states", "tool pose", "camera scene"]
+    frames.image_size = (8, 6)
     frames.on_joints(JOINTS, [1, 2, 3], [])
     frames.on_tool([0, 0, 1], [0, 0, 0, 1])
     frames.on_image(np.zeros((12, 16, 3), np.uint8))
@@ -172,6 +173,19 @@ def test_frames_wait_for_state_and_count_repeated_camera_images():
     assert features["action"]["names"] == JOINTS + ["gripper"]
     with pytest.raises(ValueError, match="HxWx3 uint8"):
         frames.on_image(np.zeros((4, 4), np.uint8))
+
+
+def test_frames_of_a_camera_of_known_size_start_black_and_counted():
+    frames = EpisodeFrames(camera="scene", image_size=(8, 6))
+    frames.on_joints(JOINTS, [1, 2, 3], [0, 0, 0])
+    frames.on_tool([0, 0, 1], [0, 0, 0, 1])
+    assert frames.missing() == []
+    assert frames.features()["observation.images.scene"]["shape"] == [6, 8, 3]
+    frames.reset_counts()
+    assert not frames.sample()["observation.images.scene"].any()
+    frames.on_image(np.full((6, 8, 3), 9, np.uint8))
+    assert frames.sample()["observation.images.scene"].max() == 9
+    assert (frames.counts.camera_missing, frames.counts.camera_new) == (1, 1)
 
 
 def test_frames_keep_the_last_hand_pose_when_the_hand_leaves():
