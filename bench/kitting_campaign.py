@@ -17,7 +17,7 @@ writes nothing.
 with bench/results/kitting_belt.json (the highest rate with >= 99 % success).
 
 Run: bench/run kitting_campaign [--trials 90] [--seed N] [--perturb] [--kit-order FILE]
-     [--feed continuous --rate 6 | --rates 3,4,5,6,7] [--ur-fake] [--name NAME]
+     [--feed continuous --rate 6 | --rates 3,4,5,6,7 [--curve-only]] [--ur-fake] [--name NAME]
 """
 
 import argparse
@@ -183,6 +183,11 @@ def main(argv=None) -> int:
     parser.add_argument("--feed", default="one_at_a_time", choices=("one_at_a_time", "continuous"))
     parser.add_argument("--rate", type=float, default=4.0, help="parts per minute with --feed continuous")
     parser.add_argument("--rates", default="", help="comma-separated rates (parts/min): the busy-belt curve")
+    parser.add_argument(
+        "--curve-only",
+        action="store_true",
+        help="with --rates: draw the curve from the runs already in bench/results/<name>_<rate>.json",
+    )
     parser.add_argument("--ur-fake", action="store_true", help="the UR driver on its simulated controller")
     parser.add_argument("--name", default="", help="results name (default kitting_campaign, kitting_belt_<rate>)")
     args = parser.parse_args(argv)
@@ -199,7 +204,12 @@ def main(argv=None) -> int:
         rates = sorted(float(r) for r in args.rates.split(","))
         rows = []
         for rate in rates:
-            summary = run_campaign(args, "continuous", rate, f"{args.name or 'kitting_belt'}_{rate:g}")
+            name = f"{args.name or 'kitting_belt'}_{rate:g}"
+            if args.curve_only:
+                path = os.path.join(RESULTS, f"{name}.json")
+                summary = json.load(open(path, encoding="utf-8")) if os.path.isfile(path) else None
+            else:
+                summary = run_campaign(args, "continuous", rate, name)
             if summary is None:
                 continue
             rows.append(
