@@ -20,6 +20,7 @@ folder that is a plain directory (made elsewhere) is adopted as version 0.
 Plain Python with no framework import: the LeRobot writer's venv uses it from this folder.
 """
 
+import json
 import os
 import re
 import shutil
@@ -29,6 +30,8 @@ __all__ = [
     "DatasetStore",
     "DatasetStoreError",
     "check_dataset_folder",
+    "read_sidecar",
+    "write_sidecar",
     "EPISODES_SIDECAR",
     "VERSIONS_SUFFIX",
 ]
@@ -44,6 +47,32 @@ _COPIED = ("meta",)  # rewritten by LeRobot when it reopens a dataset: copied, n
 
 class DatasetStoreError(RuntimeError):
     """The dataset folder cannot be used (the reason and the path in the text)."""
+
+
+def read_sidecar(root: str) -> list:
+    """The framework's record of each episode in the version ``root`` (empty before one)."""
+    path = os.path.join(root, EPISODES_SIDECAR)
+    if not os.path.exists(path):
+        return []
+    try:
+        with open(path, encoding="utf-8") as stream:
+            episodes = json.load(stream)
+    except (OSError, ValueError) as exc:
+        raise DatasetStoreError(f"{path}: unreadable episode list: {exc}") from None
+    if not isinstance(episodes, list):
+        raise DatasetStoreError(f"{path}: the episode list must be a JSON list")
+    return episodes
+
+
+def write_sidecar(root: str, episodes: list) -> None:
+    """Write the episode record into a staging copy ``root`` (fsynced, then renamed)."""
+    path = os.path.join(root, EPISODES_SIDECAR)
+    temp = path + ".tmp"
+    with open(temp, "w", encoding="utf-8") as stream:
+        json.dump(episodes, stream, indent=1)
+        stream.flush()
+        os.fsync(stream.fileno())
+    os.replace(temp, path)
 
 
 def _pid_alive(pid: int) -> bool:
@@ -179,6 +208,19 @@ class DatasetStore:
         if previous and previous != target:
             shutil.rmtree(previous, ignore_errors=True)
         return target
+
+    def mark(self, index: int, success: bool) -> dict:
+        """Set the success of saved episode ``index`` (a new version; LeRobot's files are
+        untouched); return its record."""
+        current = self.current()
+        episodes = read_sidecar(current) if current else []
+        if not 0 <= index < len(episodes):
+            raise DatasetStoreError(f"episode {index} is not in {self.path} ({len(episodes)} episodes)")
+        staging = self.stage()
+        episodes[index]["success"] = bool(success)
+        write_sidecar(staging, episodes)
+        self.commit(staging)
+        return episodes[index]
 
     def discard(self, staging: str) -> None:
         """Forget a staging copy."""

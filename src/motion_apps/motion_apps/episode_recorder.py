@@ -9,11 +9,10 @@ a session runs. Every refusal is returned as a reason, never raised, so the node
 running.
 """
 
-import json
 import os
 import time
 
-from .dataset_store import EPISODES_SIDECAR
+from .dataset_store import DatasetStore, DatasetStoreError, read_sidecar
 from .episode_frames import EpisodeFrames
 
 __all__ = ["EpisodeRecorder", "read_episode_list"]
@@ -21,14 +20,7 @@ __all__ = ["EpisodeRecorder", "read_episode_list"]
 
 def read_episode_list(dataset: str) -> list:
     """The framework's record of each saved episode of ``dataset`` (empty before the first)."""
-    path = os.path.join(dataset, EPISODES_SIDECAR)
-    try:
-        with open(path, encoding="utf-8") as stream:
-            return json.load(stream)
-    except FileNotFoundError:
-        return []
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"{path}: unreadable episode list: {exc}") from None
+    return read_sidecar(dataset) if os.path.isdir(dataset) else []
 
 
 class EpisodeRecorder:
@@ -168,9 +160,8 @@ class EpisodeRecorder:
             return False, "no episode to mark"
         last = episodes[-1]["episode_index"]
         try:
-            self._open()
-            self.writer.command("mark", episode_index=last, success=bool(success))
-        except Exception as exc:  # noqa: BLE001
+            DatasetStore(self.dataset).mark(last, success)  # the writer is idle between episodes
+        except (DatasetStoreError, OSError) as exc:
             return False, f"mark: {exc}"
         return True, f"episode {last} marked success={bool(success)}"
 
@@ -184,7 +175,7 @@ class EpisodeRecorder:
     def episodes(self) -> list:
         try:
             return read_episode_list(self.dataset)
-        except ValueError:
+        except DatasetStoreError:
             return []
 
     def status(self) -> dict:

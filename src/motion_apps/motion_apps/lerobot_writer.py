@@ -29,7 +29,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
-from dataset_store import EPISODES_SIDECAR, DatasetStore  # noqa: E402
+from dataset_store import DatasetStore, read_sidecar, write_sidecar  # noqa: E402
 from episode_wire import WireError, read_message  # noqa: E402
 
 __all__ = ["Writer", "main"]
@@ -38,24 +38,6 @@ __all__ = ["Writer", "main"]
 def _reply(out, event: str, **fields) -> None:
     out.write(json.dumps({"event": event, **fields}) + "\n")
     out.flush()
-
-
-def _read_sidecar(root: str) -> list:
-    path = os.path.join(root, EPISODES_SIDECAR)
-    if not os.path.exists(path):
-        return []
-    with open(path, encoding="utf-8") as stream:
-        return json.load(stream)
-
-
-def _write_sidecar(root: str, episodes: list) -> None:
-    path = os.path.join(root, EPISODES_SIDECAR)
-    temp = path + ".tmp"
-    with open(temp, "w", encoding="utf-8") as stream:
-        json.dump(episodes, stream, indent=1)
-        stream.flush()
-        os.fsync(stream.fileno())
-    os.replace(temp, path)
 
 
 class Writer:
@@ -83,7 +65,7 @@ class Writer:
             key: dict(spec, shape=tuple(spec["shape"])) for key, spec in header["features"].items()
         }
         current = self.store.current()
-        episodes = len(_read_sidecar(current)) if current else 0
+        episodes = len(read_sidecar(current)) if current else 0
         if current:
             self._check_features(current)
         return {"episodes": episodes, "root": self.store.path}
@@ -155,9 +137,9 @@ class Writer:
         self.dataset.stop_image_writer()
         record = dict(header.get("info", {}))
         record.update(episode_index=index, task=self.task, frames=self.frames, success=bool(header.get("success")))
-        episodes = _read_sidecar(self.staging)
+        episodes = read_sidecar(self.staging)
         episodes.append(record)
-        _write_sidecar(self.staging, episodes)
+        write_sidecar(self.staging, episodes)
         self.dataset = None
         root = self.store.commit(self.staging)
         self.staging = None
@@ -178,18 +160,10 @@ class Writer:
     def mark(self, header: dict) -> dict:
         if self.store is None and header.get("root"):
             self.store = DatasetStore(header["root"])  # marking needs no features: no open
-        current = self.store.current() if self.store else None
-        if current is None:
-            raise RuntimeError("no saved episode to mark")
-        index = int(header["episode_index"])
-        episodes = _read_sidecar(current)
-        if not 0 <= index < len(episodes):
-            raise RuntimeError(f"episode {index} is not in the dataset ({len(episodes)} episodes)")
-        staging = self.store.stage()
-        episodes[index]["success"] = bool(header.get("success"))
-        _write_sidecar(staging, episodes)
-        self.store.commit(staging)
-        return {"episode_index": index, "success": episodes[index]["success"]}
+        if self.store is None:
+            raise RuntimeError("mark before open")
+        record = self.store.mark(int(header["episode_index"]), bool(header.get("success")))
+        return {"episode_index": record["episode_index"], "success": record["success"]}
 
 
 def main(stdin=None, stdout=None) -> int:

@@ -86,6 +86,19 @@ def test_store_commits_versions_behind_one_link(tmp_path):
     assert sorted(os.listdir(store.versions)) == ["000001"]  # the older version went
 
 
+def test_store_marks_a_saved_episode_in_a_new_version(tmp_path):
+    store = DatasetStore(str(tmp_path / "set"))
+    staging = store.stage()
+    _fake_episode(staging, 0)
+    dataset_store.write_sidecar(staging, [{"episode_index": 0, "success": False}])
+    store.commit(staging)
+    assert store.mark(0, True) == {"episode_index": 0, "success": True}
+    assert dataset_store.read_sidecar(str(tmp_path / "set")) == [{"episode_index": 0, "success": True}]
+    assert store.current().endswith("000001")
+    with pytest.raises(DatasetStoreError, match="episode 3 is not in"):
+        store.mark(3, True)
+
+
 def test_store_refuses_to_commit_a_staging_copy_without_metadata(tmp_path):
     store = DatasetStore(str(tmp_path / "set"))
     staging = store.stage()
