@@ -10,6 +10,8 @@ and handled by ``TeachSession.handle_command(command, stamp)``:
   release        record a waypoint at the current pose whose action opens the gripper
   undo           remove the last waypoint (and the gripper state it set)
   save           write the program atomically to ``<programs_dir>/<program_name>.yaml``
+  stop           end teaching: save what is unsaved, then take no further gesture
+                 (the skeleton gestures' "shake", ``config/skeleton_gesture_commands.yaml``)
 
 The robot state comes from a callback ``robot_state() -> (position [m], quaternion
 x, y, z, w, joints [rad])`` (e.g. the latest /motion_controller/tool_pose and
@@ -33,7 +35,7 @@ from motion_common.errors import ParameterError
 from motion_common.params import Param, ParamSchema, read_yaml_file
 from motion_common.rotations import is_unit_quaternion, quaternion_norm
 
-COMMANDS = ("mark_waypoint", "grip", "release", "undo", "save")
+COMMANDS = ("mark_waypoint", "grip", "release", "undo", "save", "stop")
 DEFAULT_PROGRAMS_DIR = os.path.join("output", "programs")
 DEFAULT_GESTURES = {
     "hold_still": "mark_waypoint",
@@ -139,6 +141,7 @@ class TeachSession:
         self.dirty = False
         self._last_gesture: dict[str, float] = {}
         self._counter = 0
+        self.stopped = False
 
     # -- events ----------------------------------------------------------------------------
     def on_gesture(self, gesture: str, stamp: float | None = None) -> Feedback:
@@ -162,6 +165,8 @@ class TeachSession:
         """A teach command (from a gesture, a button or a service)."""
         if command not in COMMANDS:
             return Feedback(False, command, f"ignored: unknown command {command!r}; commands are {list(COMMANDS)}")
+        if self.stopped:
+            return Feedback(False, command, "ignored: teaching was stopped")
         return getattr(self, "_do_" + command)()
 
     # -- commands --------------------------------------------------------------------------
@@ -258,6 +263,13 @@ class TeachSession:
         self.dirty = False
         note = " (still gripping: the program ends holding the part)" if self.gripping else ""
         return Feedback(True, "save", f"saved {len(self.waypoints)} waypoints to {self.saved_path}{note}")
+
+    def _do_stop(self) -> Feedback:
+        saved = self._do_save() if self.dirty and self.waypoints else None
+        if saved is not None and not saved.understood:
+            return Feedback(False, "stop", f"not stopped: {saved.text}")
+        self.stopped = True
+        return Feedback(True, "stop", "teaching stopped" + (f"; {saved.text}" if saved else ""))
 
     # -- result ----------------------------------------------------------------------------
     def program(self) -> Program:
