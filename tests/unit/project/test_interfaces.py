@@ -30,6 +30,7 @@ TOOLS = {
     "webcam_hand_calibrate",
     "leap_replay_server",
     "gesture_eval",
+    "train_skeleton_gestures",
     "record_gesture",
 }
 
