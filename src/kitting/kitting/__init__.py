@@ -20,7 +20,8 @@ Its modules, by role:
   ``annotated_image`` (the image with its detections drawn, for the operator's dashboard);
 - picking: ``tracking`` (a Kalman filter per part), ``intercept`` (where and when to meet
   a part on the moving belt), ``picker`` (the kitting cycle), ``slot_program`` (tray slot
-  poses from a program taught by gesture), ``campaign`` (trials and their statistics).
+  poses from a program taught by gesture), ``kits`` (kits of one part per slot, kit order
+  files, ARIAC's kitting score), ``campaign`` (trials and their statistics).
 
 No module here imports rospy (``image_msgs`` uses the generated ``sensor_msgs`` classes
 only); the nodes are the ROS edges. The names in ``__all__`` are imported from their
@@ -93,6 +94,11 @@ _PUBLIC = {
     "plan_trials": "campaign",
     "Trial": "campaign",
     "CampaignStats": "campaign",
+    "Kit": "kits",
+    "KitScore": "kits",
+    "KitOrderError": "kits",
+    "load_kit_order": "kits",
+    "score_kit": "kits",
 }
 __all__ = list(_PUBLIC)
 
