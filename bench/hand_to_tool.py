@@ -14,11 +14,17 @@ engaged span, L searched from 0 to 300 ms in 2 ms steps):
 and hand -> tool end to end. An affine map absorbs the speed ratio and the frame change, so
 only the delay is left. Stages are not additive exactly (each fit is its own), but close.
 
-"none" is the mean filter over one frame (no smoothing). The default session is the mean
-filter over 10 frames. Recordings come from ../shared/data/leap_v6 (real Leap streams),
-falling back to tests/data.
+"none" is the mean filter over one frame (no smoothing); "mean" the paper's mean over 10
+frames. The default session is teleop_sim.launch's default filter (one_euro). Recordings
+come from ../shared/data/leap_v6 (real Leap streams), falling back to tests/data.
+
+The UR path: the same sessions with the UR driver on its simulated controller
+(real_robot:=true fake_controller:=true), whose servoJ follows each target first-order with
+the lookahead time as time constant (a delay and smoothing of that length), for each
+lookahead in --lookaheads, with the default filter.
 
 Run: bench/run hand_to_tool [--recordings NAME ...] [--filters none mean one_euro kalman]
+     [--lookaheads 0.03 0.05 0.1]
 Writes bench/results/hand_to_tool.json (top level hand_to_tool_ms_p50: over the recordings,
 default session) and bench/results/hand_to_tool.png (hand and tool against time, one
 recording).
@@ -39,6 +45,7 @@ from bench_common import RESULTS, write_results
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src", "motion_commander"))
 from motion_commander.lag_estimate import LAGS_S, MIN_SPAN_M, best_lag, trailing_lag  # noqa: E402, F401
+from motion_common.launch_args import declared_args  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 SHARED = os.path.abspath(os.path.join(ROOT, "..", "shared", "data", "leap_v6"))
@@ -46,12 +53,19 @@ SHARED = os.path.abspath(os.path.join(ROOT, "..", "shared", "data", "leap_v6"))
 DEFAULT = ["brian", "test-paddle-rightwards", "Waiting-110fps", "wave", "flapping", "rollAndPitchCropped"]
 FILTERS = {
     "none": ["filter:=mean", "queue_size:=1"],
-    "mean": [],
+    "mean": ["filter:=mean", "queue_size:=10"],
     "one_euro": ["filter:=one_euro"],
     "kalman": ["filter:=kalman"],
 }
+# The filter of a session started without filter:= (teleop_sim.launch's default, the
+# sequencer's declared default: a unit test keeps them equal).
+DEFAULT_FILTER = declared_args(os.path.join(ROOT, "src", "motion_bringup", "launch", "teleop_sim.launch"))[
+    "filter"
+].default
 PORT = 11481
 STAGES = [("raw", "filtered"), ("filtered", "target"), ("target", "commanded"), ("commanded", "tool"), ("raw", "tool")]
+STAGE_NAMES = [f"{a}->{b}" for a, b in STAGES]
+UR_LOOKAHEADS = [0.03, 0.05, 0.1]  # s, servoJ lookahead times run on the UR path
 
 
 def recording_path(name):
@@ -125,6 +139,15 @@ def record(out_path):
     np.savez(out_path, **{name: np.array(values, dtype=float).reshape(-1, 4) for name, values in rows.items()})
 
 
+def ur_args(lookahead, workdir):
+    """Session arguments of the UR path: the UR driver on its simulated controller, whose
+    servoJ follows with the lookahead's delay and smoothing, with this lookahead."""
+    params = os.path.join(workdir, "ur_params.yaml")
+    with open(params, "w", encoding="utf-8") as stream:
+        stream.write(f"lookahead_time: {lookahead}\n")
+    return ["real_robot:=true", "fake_controller:=true", f"driver_params:={params}"]
+
+
 def run_session(recording, filter_args, workdir):
     """One session recorded; the five streams as arrays of rows (t, x, y, z)."""
     env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}", ROS_HOME=workdir)
@@ -178,40 +201,72 @@ def plot(streams, title, path):
     os.remove(temporary)
 
 
+def p50(values):
+    values = [v for v in values if v is not None]
+    return float(np.median(values)) if values else None
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--recordings", nargs="+", default=DEFAULT, help="recording names (default: %(default)s)")
     parser.add_argument("--filters", nargs="+", default=list(FILTERS), choices=list(FILTERS), help="filters to run")
+    parser.add_argument(
+        "--lookaheads",
+        nargs="*",
+        type=float,
+        default=UR_LOOKAHEADS,
+        help="UR path: servoJ lookahead times (s) to run with the default filter (none: skip the UR path)",
+    )
     parser.add_argument("--record", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.record:
         record(args.record)
         return
-    results = {"method": "affine fit of each stage's output to its input delayed by L; L in 0-300 ms, 2 ms steps"}
-    per = {}
-    total = len(args.recordings) * len(args.filters)
-    done = 0
-    for name in args.recordings:
-        path = recording_path(name)
-        per[name] = {}
-        for filter_name in args.filters:
-            with tempfile.TemporaryDirectory(prefix="hand-to-tool-") as workdir:
-                streams = run_session(path, FILTERS[filter_name], workdir)
-            done += 1
-            if len(streams["target"]) < 20:
-                per[name][filter_name] = {"error": "the clutch never engaged"}
-            else:
-                per[name][filter_name] = stage_lags(streams)
-                if name == args.recordings[0] and filter_name == "mean":
-                    plot(streams, f"{name}: hand, core target and tool (x)", os.path.join(RESULTS, "hand_to_tool.png"))
-            print(f"[{done}/{total}] {name:26s} {filter_name:9s} {per[name][filter_name]}", flush=True)
+    results = {
+        "method": "affine fit of each stage's output to its input delayed by L; L in 0-300 ms, 2 ms steps",
+        "default_filter": DEFAULT_FILTER,
+    }
+    runs = [(name, filter_name, None) for name in args.recordings for filter_name in args.filters]
+    runs += [(name, DEFAULT_FILTER, lookahead) for lookahead in args.lookaheads for name in args.recordings]
+    per, ur = {}, {}
+    for done, (name, filter_name, lookahead) in enumerate(runs, start=1):
+        with tempfile.TemporaryDirectory(prefix="hand-to-tool-") as workdir:
+            extra = [] if lookahead is None else ur_args(lookahead, workdir)
+            streams = run_session(recording_path(name), FILTERS[filter_name] + extra, workdir)
+        if len(streams["target"]) < 20:
+            lags = {"error": "the clutch never engaged"}
+        else:
+            lags = stage_lags(streams)
+            if lookahead is None and name == args.recordings[0] and filter_name == DEFAULT_FILTER:
+                title = f"{name}: hand, core target and tool (x), default session ({filter_name})"
+                plot(streams, title, os.path.join(RESULTS, "hand_to_tool.png"))
+        if lookahead is None:
+            per.setdefault(name, {})[filter_name] = lags
+            label = f"{filter_name:9s}"
+        else:
+            ur.setdefault(f"{lookahead:g}", {})[name] = lags
+            label = f"UR lookahead {lookahead:g} s"
+        print(f"[{done}/{len(runs)}] {name:26s} {label} {lags}", flush=True)
     results["recordings"] = per
     for filter_name in args.filters:
-        ends = [per[n][filter_name].get("raw->tool") for n in per if per[n][filter_name].get("raw->tool") is not None]
-        results[f"{filter_name}_hand_to_tool_ms_p50"] = float(np.median(ends)) if ends else None
-    results["hand_to_tool_ms_p50"] = results.get("mean_hand_to_tool_ms_p50")
+        results[f"{filter_name}_hand_to_tool_ms_p50"] = p50(per[n][filter_name].get("raw->tool") for n in per)
+        for stage in STAGE_NAMES:
+            results.setdefault("stage_ms_p50", {}).setdefault(filter_name, {})[stage] = p50(
+                per[n][filter_name].get(stage) for n in per
+            )
+    results["hand_to_tool_ms_p50"] = results.get(f"{DEFAULT_FILTER}_hand_to_tool_ms_p50")
+    if ur:
+        results["ur_path"] = {
+            "filter": DEFAULT_FILTER,
+            "driver": "ur_rtde_fake: servoJ followed first-order with the lookahead as time constant",
+            "recordings": ur,
+            "hand_to_tool_ms_p50": {k: p50(v[n].get("raw->tool") for n in v) for k, v in ur.items()},
+            "commanded_to_tool_ms_p50": {k: p50(v[n].get("commanded->tool") for n in v) for k, v in ur.items()},
+        }
     write_results("hand_to_tool", results, show=False)
     print(json.dumps({k: v for k, v in results.items() if k.endswith("p50")}, indent=2))
+    if ur:
+        print("UR path, hand -> tool p50 by lookahead (s):", results["ur_path"]["hand_to_tool_ms_p50"])
 
 
 if __name__ == "__main__":

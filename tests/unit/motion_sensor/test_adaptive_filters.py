@@ -177,3 +177,42 @@ def test_kalman_loads_filterpy_when_built_not_on_the_first_frame():
     common_root = os.path.join(ROOT, "src", "motion_common")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([package_root, common_root, os.environ.get("PYTHONPATH", "")]))
     subprocess.run([sys.executable, "-c", code], check=True, env=env)
+
+
+def test_a_windowed_speed_tells_a_slow_move_from_tremor_sooner(rng):
+    # 0.1 m/s is a slow deliberate move; the classic speed (consecutive inputs smoothed at
+    # dcutoff = 1 Hz) still reads it below the 0.08 m/s threshold a while after it starts.
+    stamps, positions, truth, moving = synthetic_hand(rng, speed=0.1)
+    classic = run(OneEuroFilter(speed_window=0.0), stamps, positions)
+    windowed = run(OneEuroFilter(speed_window=0.2), stamps, positions)
+    t = stamps - stamps[0]
+    onset = moving & (t < 2.5)  # the first half second of the move
+
+    def onset_lag(output):
+        return float(np.mean(np.linalg.norm(output[onset] - truth[onset], axis=1)))
+
+    assert onset_lag(windowed) < 0.7 * onset_lag(classic), (onset_lag(windowed), onset_lag(classic))
+    # The tremor nets nothing over the window: the still hand stays as steady.
+    assert still_jitter(windowed, stamps) <= 1.1 * still_jitter(classic, stamps)
+
+
+def test_lag_compensation_adds_back_the_low_pass_lag_and_never_more_than_max_lead():
+    stamps = 100.0 + np.arange(0.0, 2.0, 1.0 / RATE)
+    ramp = np.column_stack([0.05 * (stamps - stamps[0]), np.zeros(len(stamps)), np.zeros(len(stamps))])
+    # 0.05 m/s: below the speed threshold, the 3 Hz low-pass trails by v / (2 pi 3 Hz) = 2.65 mm.
+    plain = run(OneEuroFilter(lag_compensation=0.0), stamps, ramp)
+    compensated = run(OneEuroFilter(lag_compensation=1.0), stamps, ramp)
+    assert ramp[-1, 0] - plain[-1, 0] == pytest.approx(0.05 / (2 * np.pi * 3.0), rel=0.1)
+    assert abs(ramp[-1, 0] - compensated[-1, 0]) < 0.0003
+    # A jump (a hand re-found elsewhere) reads as a high speed: the lead stays bounded.
+    bounded = OneEuroFilter(lag_compensation=1.0, max_lead=0.002, beta=0.0)
+    run(bounded, stamps[:50], ramp[:50])
+    out, _ = bounded.update(stamps[50], ramp[50] + [0.5, 0.0, 0.0], IDENTITY)
+    assert np.linalg.norm(bounded._lead) <= 0.002 + 1e-12
+    assert out[0] <= ramp[50, 0] + 0.5 + 0.002 + 1e-9
+
+
+def test_the_new_one_euro_parameters_are_checked():
+    for params in ({"speed_window": -0.1}, {"lag_compensation": 1.5}, {"max_lead": -1.0}):
+        with pytest.raises(MotionSensorError):
+            OneEuroFilter(**params)

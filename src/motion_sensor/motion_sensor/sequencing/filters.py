@@ -164,6 +164,14 @@ class OneEuroFilter:
     output moves only by what the filtered position exceeds that radius around it, so a
     hand held still gives a still output, and a moving one is followed at most
     ``deadband`` behind.
+
+    ``speed_window`` (s, 0 = off) measures the speed that opens the cutoff as the net
+    displacement over that window instead: a still hand's tremor goes back and forth and
+    nets little, while a slow deliberate move adds up, so slow moves are told from tremor
+    sooner and followed with less lag. ``lag_compensation`` (0-1) adds back that fraction of
+    the low-pass's own lag on a steady move (the speed times the time constant
+    1 / (2 pi cutoff)), never more than ``max_lead`` (m); the lead lives only on each frame's
+    output, so a hand that is lost is never extrapolated.
     """
 
     # Defaults from bench/filter_bench.py on the real recordings: steadier than mean-10
@@ -177,6 +185,9 @@ class OneEuroFilter:
         beta_rot: float = 0.5,
         deadband: float = 0.0,
         speed_threshold: float = 0.08,
+        speed_window: float = 0.2,
+        lag_compensation: float = 0.0,
+        max_lead: float = 0.005,
     ):
         for name, value in (("mincutoff", mincutoff), ("dcutoff", dcutoff)):
             if not value > 0:
@@ -186,12 +197,19 @@ class OneEuroFilter:
             ("beta_rot", beta_rot),
             ("deadband", deadband),
             ("speed_threshold", speed_threshold),
+            ("speed_window", speed_window),
+            ("max_lead", max_lead),
         ):
             if not value >= 0:
                 raise MotionSensorError(f"one_euro {name} must be >= 0, got {value!r}")
+        if not 0.0 <= lag_compensation <= 1.0:
+            raise MotionSensorError(f"one_euro lag_compensation must be in [0, 1], got {lag_compensation!r}")
         self.mincutoff, self.beta, self.dcutoff, self.beta_rot = mincutoff, beta, dcutoff, beta_rot
         self.deadband = float(deadband)
         self.speed_threshold = float(speed_threshold)
+        self.speed_window = float(speed_window)
+        self.lag_compensation = float(lag_compensation)
+        self.max_lead = float(max_lead)
         self.reset()
 
     def reset(self) -> None:
@@ -203,16 +221,30 @@ class OneEuroFilter:
         self._orientation = None
         self._angular_speed = 0.0
         self._output = None
+        # (stamp, position) of the inputs within speed_window; bounded by time and by count
+        # (a 1 kHz device over the longest sensible window).
+        self._recent = deque(maxlen=1024)
+        self._lead = np.zeros(3)
+
+    def _window_velocity(self, stamp: float, position: np.ndarray) -> np.ndarray:
+        """Net displacement over the last ``speed_window`` s divided by its time: a still
+        hand's tremor goes back and forth and nets little, a slow move adds up."""
+        recent = self._recent
+        recent.append((stamp, position))
+        while len(recent) > 2 and stamp - recent[1][0] >= self.speed_window:
+            recent.popleft()
+        start, origin = recent[0]
+        return (position - origin) / (stamp - start) if stamp > start else np.zeros(3)
 
     def _hysteresis(self) -> np.ndarray:
         if self.deadband == 0.0 or self._output is None:
             self._output = self._position.copy()
-            return self._output.copy()
+            return self._output + self._lead
         excess = self._position - self._output
         distance = float(np.linalg.norm(excess))
         if distance > self.deadband:
             self._output = self._output + excess * (1.0 - self.deadband / distance)
-        return self._output.copy()
+        return self._output + self._lead
 
     def update(self, stamp: float, position: np.ndarray, orientation: np.ndarray):
         """Filter one pose; return (position, orientation)."""
@@ -221,6 +253,8 @@ class OneEuroFilter:
         if self._stamp is None:
             self._stamp, self._position, self._orientation = stamp, position.copy(), orientation.copy()
             self._last_input = position.copy()
+            if self.speed_window > 0.0:
+                self._recent.append((stamp, position.copy()))
             return self._hysteresis(), self._orientation.copy()
         dt = stamp - self._stamp
         if dt <= 0:
@@ -234,10 +268,18 @@ class OneEuroFilter:
         self._last_input = position.copy()
         a_d = _smoothing_factor(dt, self.dcutoff)
         self._velocity = a_d * raw_velocity + (1 - a_d) * self._velocity
-        speed = float(np.linalg.norm(self._velocity))
+        velocity = self._window_velocity(stamp, position.copy()) if self.speed_window > 0.0 else self._velocity
+        speed = float(np.linalg.norm(velocity))
         cutoff = self.mincutoff + self.beta * max(0.0, speed - self.speed_threshold)
         a = _smoothing_factor(dt, cutoff)
         self._position = a * position + (1 - a) * self._position
+        if self.lag_compensation > 0.0:
+            # A first-order low-pass trails a steady move by its time constant times the
+            # speed: add that fraction of it back, never more than max_lead. The lead exists
+            # only on a frame's own output; without frames (a lost hand) nothing is output.
+            lead = self.lag_compensation * velocity / (2.0 * math.pi * cutoff)
+            size = float(np.linalg.norm(lead))
+            self._lead = lead * (self.max_lead / size) if size > self.max_lead else lead
         # Orientation: the same on the sphere.
         dot = abs(float(np.dot(self._orientation, orientation)))
         raw_angular = 2.0 * np.arccos(min(dot, 1.0)) / dt
@@ -439,6 +481,23 @@ FILTER_PARAMS = ParamSchema(
                         low=0,
                         doc="speed below which the cutoff stays at mincutoff",
                     ),
+                    Param(
+                        "speed_window",
+                        0.2,
+                        unit="s",
+                        low=0,
+                        high=1.0,
+                        doc="speed as the net move over this window (0: consecutive inputs smoothed at dcutoff)",
+                    ),
+                    Param(
+                        "lag_compensation",
+                        0.0,
+                        unit="fraction",
+                        low=0,
+                        high=1.0,
+                        doc="part of the low-pass's lag on a steady move added back (speed x time constant)",
+                    ),
+                    Param("max_lead", 0.005, unit="m", low=0, doc="largest lag compensation"),
                 ]
             ),
         ),

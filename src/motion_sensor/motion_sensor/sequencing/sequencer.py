@@ -46,7 +46,7 @@ INPUT_PARAMS = ParamSchema(
 # The sequencer node's parameters (config/sequencer.yaml and what launch files set).
 SEQUENCER_PARAMS = ParamSchema(
     [
-        Param("filter", "mean", choices=tuple(sorted(FILTERS)), doc="pose filter"),
+        Param("filter", "one_euro", choices=tuple(sorted(FILTERS)), doc="pose filter"),
         Param("filter_params", {}, schema=FILTER_PARAMS, doc="per filter name, that filter's parameters"),
         Param(
             "queue_size",
