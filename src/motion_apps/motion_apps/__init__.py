@@ -18,7 +18,9 @@ shared with the kitting application):
   ``lerobot_writer`` (that process: LeRobot's own writer, run in ``.venv-lerobot``),
   ``dataset_store`` (one atomically committed version of the dataset per episode; the
   folder check), ``lerobot_reader`` and ``lerobot_readback`` (a dataset read back by
-  LeRobot's own loader, as NumPy arrays).
+  LeRobot's own loader, as NumPy arrays), ``episode_replay`` (an episode's actions sent
+  again, the tool's error against the recording) and ``episode_report`` (the dataset's
+  summary and one episode's picture).
 
 Plain Python: no rospy outside ``nodes/``. The names in ``__all__`` are imported from
 their module on first use, so ``import motion_apps`` loads neither pybullet nor

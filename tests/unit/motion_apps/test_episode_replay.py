@@ -1,0 +1,96 @@
+"""Replay of a recorded episode against a stand-in server (no ROS), and the dataset's
+summary and picture."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+from motion_apps.episode_replay import EpisodeReplay
+from motion_apps.episode_report import dataset_size_bytes, format_summary, plot_episode, summarize_dataset
+
+
+class _Arm:
+    """A server whose tool sits at the first three joints (metres) one call behind."""
+
+    def __init__(self, refuse_at=None):
+        self.joints = np.zeros(3)
+        self.calls = []
+        self.refuse_at = refuse_at
+        self.sent = 0
+
+    def move_j(self, joints):
+        self.calls.append(("move_j", list(joints)))
+        self.joints = np.array(joints)
+
+    def set_gripper(self, closed):
+        self.calls.append(("gripper", closed))
+
+    def get_pose(self):
+        return list(self.joints), [0, 0, 0, 1]
+
+    def set_joints(self, joints):
+        if self.sent == self.refuse_at:
+            raise RuntimeError("SET_JOINTS refused: STREAM_STEP_TOO_LARGE")
+        self.sent += 1
+        self.joints = np.array(joints)
+
+
+def _episode(n=20):
+    path = np.stack([np.linspace(0, 0.1, n), np.zeros(n), np.full(n, 0.5)], axis=1).astype(np.float32)
+    gripper = (np.arange(n) >= n // 2).astype(np.float32)[:, None]
+    states = np.hstack([path, gripper])
+    actions = np.hstack([np.vstack([path[1:], path[-1:]]), gripper])
+    tools = np.hstack([path, np.tile([0, 0, 0, 1], (n, 1))]).astype(np.float32)
+    return states, actions, tools
+
+
+def _replay(arm):
+    now = [0.0]
+    return EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=lambda s: now.__setitem__(0, now[0] + s))
+
+
+def test_replay_retraces_the_recorded_tool_and_sets_the_gripper_where_it_changed():
+    states, actions, tools = _episode()
+    arm = _Arm()
+    report = _replay(arm).run(states, actions, tools)
+    assert arm.calls[0] == ("move_j", pytest.approx([0.0, 0.0, 0.5]))
+    assert arm.calls[1:] == [("gripper", False), ("gripper", True)]
+    summary = report.summary()
+    assert summary["frames"] == 20 and summary["compared"] == 19 and summary["refused"] == 0
+    assert summary["tool_error_mm_max"] == pytest.approx(0.0, abs=1e-3)
+
+
+def test_replay_reports_a_refusal_and_stops():
+    states, actions, tools = _episode()
+    report = _replay(_Arm(refuse_at=5)).run(states, actions, tools)
+    assert report.refused == 1 and report.reason.startswith("frame 5: SET_JOINTS refused")
+
+
+def test_replay_refuses_episodes_whose_arrays_disagree():
+    states, actions, tools = _episode()
+    with pytest.raises(ValueError, match="differ in length"):
+        _replay(_Arm()).run(states, actions[:-1], tools)
+
+
+def test_summary_and_picture_of_a_dataset(tmp_path):
+    root = tmp_path / "versions" / "000000"
+    (root / "data").mkdir(parents=True)
+    (root / "data" / "a.parquet").write_bytes(b"x" * 1000)
+    os.link(root / "data" / "a.parquet", root / "data" / "same.parquet")  # counted once
+    os.symlink(root, tmp_path / "set")
+    assert dataset_size_bytes(str(tmp_path / "set")) == 1000
+    meta = {"episodes": 2, "frames": 40, "fps": 10, "video_keys": ["observation.images.scene"]}
+    records = [{"success": True, "camera_loss_fraction": 0.1}, {"success": False, "camera_loss_fraction": 0.0}]
+    summary = summarize_dataset(str(tmp_path / "set"), meta, records)
+    assert (summary["episodes"], summary["successes"], summary["size_mb"]) == (2, 1, 0.0)
+    text = format_summary(summary)
+    assert "2 (1 successful)" in text and "40 at 10 fps" in text and "10.0 %" in text
+    json.dumps(summary)
+    states, actions, _ = _episode()
+    frames = np.random.default_rng(1).uniform(size=(20, 3, 12, 16)).astype(np.float32)
+    episode = {"observation.state": states, "action": actions, "observation.images.scene": frames}
+    path = plot_episode(str(tmp_path / "episode.png"), episode, 10.0, "test")
+    with open(path, "rb") as stream:
+        assert stream.read(8) == b"\x89PNG\r\n\x1a\n"
