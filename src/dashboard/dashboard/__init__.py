@@ -10,7 +10,8 @@ Its modules, by role:
   paths), ``series`` (the bounded time series: status, latency, tracking error),
   ``event_log`` (the bounded log, newest first), ``robot_view`` (the arm's links and
   joint readings from the URDF's forward kinematics), ``readings`` (message contents as
-  the page shows them), ``status_style`` (the teleop status's name and colour);
+  the page shows them), ``status_style`` (the teleop status's name and colour),
+  ``episodes`` (the episode recorder's messages as the episode panel shows them);
 - rules and actions (plain Python): ``controls`` (which controls can act now, and why
   not; the check of a typed speed ratio), ``application`` (which panels each
   application shows), ``jobs`` (program runs and kitting campaigns as child processes), ``programs``

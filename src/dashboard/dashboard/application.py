@@ -8,8 +8,9 @@ __all__ = ["APPLICATIONS", "PANELS", "detect_application", "panels_for"]
 
 APPLICATIONS = ("teleop", "teach", "kitting")
 
-# Panels every application shows: the robot, its path, the charts, the log, the joints.
-_COMMON = ("scene", "path", "joints", "series", "events", "robot")
+# Panels every application shows: the robot, its path, the charts, the log, the joints,
+# the recorded episodes.
+_COMMON = ("scene", "path", "joints", "series", "events", "robot", "episodes")
 PANELS = {
     "teleop": frozenset(_COMMON + ("input", "teleop", "sequencer", "programs")),
     "teach": frozenset(_COMMON + ("input", "teleop", "sequencer", "programs")),

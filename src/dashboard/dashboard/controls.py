@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 from .status_style import is_engaged
 
-__all__ = ["ControlState", "control_states", "RatioDecision", "check_speed_ratio", "CONFIRM_FACTOR"]
+__all__ = ["ControlState", "control_states", "episode_states", "RatioDecision", "check_speed_ratio", "CONFIRM_FACTOR"]
 
 
 @dataclass(frozen=True)
@@ -95,6 +95,21 @@ def control_states(
             (program_job, "a program run is in progress"),
         ),
         "campaign_end": _first((not campaign_job, "no campaign is running")),
+        **episode_states(values.get("episodes_status")),
+    }
+
+
+def episode_states(status) -> dict[str, ControlState]:
+    """The episode panel's buttons from the recorder's status (None: no recorder)."""
+    none = "no episode recorder (start the session with dataset:=FOLDER)"
+    recording = bool(status and status.get("recording"))
+    idle = "no episode is being recorded"
+    return {
+        "episode_start": _first((status is None, none), (recording, "an episode is being recorded")),
+        "episode_stop": _first((status is None, none), (not recording, idle)),
+        "episode_discard": _first((status is None, none), (not recording, idle)),
+        "episode_success": _first((status is None, none)),
+        "episode_failure": _first((status is None, none)),
     }
 
 

@@ -27,6 +27,7 @@ from .access import check_access_config, load_token
 from .application import detect_application
 from .config import DASHBOARD_PARAMETERS
 from .controls import check_speed_ratio
+from .episodes import parse_episode_message
 from .jobs import Job, campaign_command, run_program_command
 from .readings import campaign_line, driver_status, kitting_event_line, sequencer_counters, tool_reading
 from .state import DashboardState
@@ -61,6 +62,7 @@ class DashboardNode:
         self.ratio_pub = publisher(DASHBOARD, "motion_commander/set_speed_ratio", queue_size=1)
         self.filter_pub = publisher(DASHBOARD, "motion_sensor/set_filter", queue_size=1)
         self.campaign_stop_pub = publisher(DASHBOARD, "kitting_trials/stop", queue_size=1)
+        self.episode_pub = publisher(DASHBOARD, "episodes/command", queue_size=5)
         self.latch = service_proxy(DASHBOARD, LATCH_SERVICE)
         s = self.state
 
@@ -81,6 +83,8 @@ class DashboardNode:
         subscribe("motion_commander/target", self.on_target, queue_size=10)
         subscribe("diagnostics", self.on_diagnostics, queue_size=10)
         subscribe("motion_controller/status", self.on_driver, queue_size=5)
+        subscribe("episodes/status", lambda m: self.on_episode_message("episodes_status", m, dict), queue_size=5)
+        subscribe("episodes/list", lambda m: self.on_episode_message("episodes", m, list), queue_size=5)
         subscribe("kitting_trials/progress", lambda m: self.on_campaign("campaign_progress", m), queue_size=5)
         subscribe("kitting_trials/result", lambda m: self.on_campaign("campaign_result", m), queue_size=5)
         subscribe("kitting/events", self.on_kitting_event, queue_size=20)
@@ -242,6 +246,18 @@ class DashboardNode:
         """Ask the campaign to end after reporting the trials so far."""
         self.campaign_stop_pub.publish(Bool(True))
         return "campaign end requested: it reports the trials so far"
+
+    def on_episode_message(self, key, msg, kind):
+        value, reason = parse_episode_message(msg.data, kind)
+        if value is None:
+            rospy.logwarn_throttle(10.0, "dashboard: %s refused: %s", key, reason)
+            return
+        self.state.set(key, value)
+
+    def episode_command(self, word: str) -> str:
+        """Start, stop, discard, or mark the episode (the recorder answers on episodes/status)."""
+        self.episode_pub.publish(String(word))
+        return f"episode: {word} sent to the recorder"
 
     def on_campaign_exit(self, job):
         if self.state.get("campaign_result") is None:

@@ -19,7 +19,7 @@ DASHBOARD = NodeInterface(
     "dashboard",
     "The operator's web console (NiceGUI): a 3-D view of the arm, the hand and tool paths, time series, an "
     "event log, the kitting camera and the session's controls (engage, e-stop and release, speed ratio, "
-    "filter, programs, kitting campaigns).",
+    "filter, programs, kitting campaigns, recorded episodes).",
     DASHBOARD_PARAMETERS,
     publishes=(
         Topic("motion_commander/engage", "std_msgs/Bool", "the clutch button"),
@@ -27,6 +27,7 @@ DASHBOARD = NodeInterface(
         Topic("motion_commander/set_speed_ratio", "std_msgs/Float64", "a new speed ratio"),
         Topic("motion_sensor/set_filter", "std_msgs/String", "a new filter"),
         Topic("kitting_trials/stop", "std_msgs/Bool", "stop a running campaign"),
+        Topic("episodes/command", "std_msgs/String", "start, stop, discard, success, failure (episode panel)"),
     ),
     subscribes=(
         _in("motion_commander/status", "std_msgs/UInt8", "teleop status"),
@@ -43,6 +44,8 @@ DASHBOARD = NodeInterface(
         _in("motion_commander/target", "geometry_msgs/PoseStamped", "the hand path"),
         _in("diagnostics", "diagnostic_msgs/DiagnosticArray", "the sequencer's counters"),
         _in("motion_controller/status", "diagnostic_msgs/DiagnosticStatus", "the driver's state"),
+        _in("episodes/status", "std_msgs/String", "the episode recorder's state (episode panel)"),
+        _in("episodes/list", "std_msgs/String", "the recorded episodes (episode panel)"),
         _in("kitting_trials/progress", "std_msgs/String", "campaign progress"),
         _in("kitting_trials/result", "std_msgs/String", "campaign result"),
         _in("kitting/events", "kitting/KittingEvent", "the kitting cell's picks, places and misses (event log)"),

@@ -19,6 +19,7 @@ from motion_sensor.sequencing.filters import FILTERS as FILTER_REGISTRY
 from .access import HostOriginGuard, token_accepted
 from .application import panels_for
 from .controls import control_states
+from .episodes import episode_rows, episode_status_text
 from .readings import device_label, image_data_url
 from .status_style import STATUS_COLOURS, status_view
 
@@ -26,7 +27,13 @@ __all__ = ["DashboardPage", "serve"]
 
 COLOURS = {"grey": "#9e9e9e", "green": "#2e7d32", "amber": "#f9a825", "orange": "#ef6c00", "red": "#c62828"}
 FILTERS = list(FILTER_REGISTRY)  # the sequencer's filters, in its order
-REASON_GROUPS = (("engage", "disengage"), ("dry_run", "replay", "delete"), ("campaign_start", "campaign_end"))
+REASON_GROUPS = (
+    ("engage", "disengage"),
+    ("dry_run", "replay", "delete"),
+    ("campaign_start", "campaign_end"),
+    ("episode_start", "episode_stop", "episode_discard", "episode_success", "episode_failure"),
+)
+EPISODE_COLUMNS = ("episode", "task", "frames", "seconds", "outcome", "camera loss")
 CARD_W = "width: 425px"
 LINK_RADIUS_M = 0.035
 JOINT_RADIUS_M = 0.045
@@ -105,6 +112,7 @@ class DashboardPage:
             self._sequencer_card()
             self._programs_card()
             self._kitting_card()
+            self._episodes_card()
         ui.label(
             "The STOP button is a software stop through the robot server, not a safety-rated emergency stop: "
             "keep the robot's own e-stop within reach."
@@ -357,6 +365,35 @@ class DashboardPage:
                 "class-table",
             )
 
+    def _episodes_card(self):
+        with self._panel("episodes", "width: 520px"):
+            ui.label("Recorded episodes (LeRobot dataset)").classes("text-subtitle1 text-weight-bold")
+            self.episode_label = _tid(ui.label("-"), "episode-status").classes("text-body2")
+            with ui.row():
+                for key, text, word in (
+                    ("episode_start", "Start", "start"),
+                    ("episode_stop", "Stop and save", "stop"),
+                    ("episode_discard", "Discard", "discard"),
+                    ("episode_success", "Success", "success"),
+                    ("episode_failure", "Failure", "failure"),
+                ):
+                    self.buttons[key] = _tid(
+                        ui.button(text, on_click=lambda w=word: self.on_episode(w)), key.replace("_", "-")
+                    )
+            for key in ("episode_start", "episode_stop", "episode_discard", "episode_success", "episode_failure"):
+                self._reason(key)
+            self.episode_rows_key = None
+            self.episode_table = _tid(
+                ui.table(
+                    columns=[{"name": c, "label": c, "field": c} for c in EPISODE_COLUMNS],
+                    rows=[],
+                    row_key="episode",
+                )
+                .props("dense flat virtual-scroll")
+                .style("max-height: 260px"),
+                "episode-table",
+            )
+
     # -- refresh -------------------------------------------------------------------------
     def refresh(self) -> None:
         """Copy a snapshot into the widgets (runs on the page's timer)."""
@@ -422,6 +459,7 @@ class DashboardPage:
             self.events_version = snap["events_version"]
             self.events_label.set_text("\n".join(snap["events"][:EVENT_LINES]) or "-")
         self._refresh_jobs(values)
+        self._refresh_episodes(values)
         jobs = self.actions.jobs()
         states = control_states(
             values, program_job=jobs["program"], campaign_job=jobs["campaign"], selected_program=self.selected_program
@@ -444,6 +482,15 @@ class DashboardPage:
                 self.filter_select.set_value(values["filter"])
         self.ratio_input.set_enabled(states["speed_ratio"].enabled)
         self.filter_select.set_enabled(states["filter"].enabled)
+
+    def _refresh_episodes(self, values):
+        self.episode_label.set_text(episode_status_text(values.get("episodes_status")))
+        rows = episode_rows(values.get("episodes") or [])
+        key = tuple(tuple(r.values()) for r in rows)
+        if key != self.episode_rows_key:
+            self.episode_rows_key = key
+            self.episode_table.rows = rows
+            self.episode_table.update()
 
     def _refresh_plot(self, paths):
         key = tuple((len(p), tuple(p[-1]) if p else None) for p in paths.values())
@@ -625,6 +672,9 @@ class DashboardPage:
 
     async def on_campaign_end(self):
         ui.notify(await run.io_bound(self.actions.end_campaign))
+
+    async def on_episode(self, word: str):
+        ui.notify(await run.io_bound(self.actions.episode_command, word))
 
 
 def serve(state, actions, params: dict, on_started: Callable[[], None] = None, extra_hosts=()) -> None:
