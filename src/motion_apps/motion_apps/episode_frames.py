@@ -13,8 +13,10 @@ LeRobot features (float32 unless said):
 - ``action``: the joint targets the core commanded (rad), then the gripper command (the
   server's gripper state after each accepted SET_GRIPPER); before the first command, the
   measured joints (holding still);
-- ``action.tool_target``: the core's tool target pose, x y z qx qy qz qw; before the first,
-  the measured tool pose.
+- ``tool_target``: the core's tool target pose, x y z qx qy qz qw; before the first,
+  the measured tool pose. The action in tool space, kept outside LeRobot's ``action*``
+  names on purpose: LeRobot's policies take every feature whose name starts with
+  ``action`` as an output, and most predict one (``action``).
 
 A frame is made at each tick of the recorder's clock from the newest value of every
 stream, so all frames are ``1 / fps`` apart (LeRobot's timestamps are ``index / fps``). A
@@ -158,7 +160,7 @@ class EpisodeFrames:
             "observation.tool_pose": {"dtype": "float32", "shape": [7], "names": POSE_NAMES},
             "observation.hand": {"dtype": "float32", "shape": [len(HAND_NAMES)], "names": HAND_NAMES},
             "action": {"dtype": "float32", "shape": [len(with_gripper)], "names": with_gripper},
-            "action.tool_target": {"dtype": "float32", "shape": [7], "names": POSE_NAMES},
+            "tool_target": {"dtype": "float32", "shape": [7], "names": POSE_NAMES},
         }
         if self.camera:
             h, w = self.image.shape[:2] if self.image is not None else self.image_size[::-1]
@@ -186,7 +188,7 @@ class EpisodeFrames:
             "observation.tool_pose": self.tool.copy(),
             "observation.hand": self.hand.copy(),
             "action": np.concatenate([joints_target, gripper]),
-            "action.tool_target": (self.target if self.target is not None else self.tool).copy(),
+            "tool_target": (self.target if self.target is not None else self.tool).copy(),
         }
         if self.camera:
             if self.image is None:

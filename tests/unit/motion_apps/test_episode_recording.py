@@ -171,7 +171,7 @@ def test_frames_wait_for_state_and_count_repeated_camera_images():
     first = frames.sample()
     assert first["observation.images.scene"].shape == (6, 8, 3)  # resized
     np.testing.assert_array_equal(first["action"], [1, 2, 3, 0])  # no command yet: hold still; gripper open
-    np.testing.assert_array_equal(first["action.tool_target"], [0, 0, 1, 0, 0, 0, 1])
+    np.testing.assert_array_equal(first["tool_target"], [0, 0, 1, 0, 0, 0, 1])
     np.testing.assert_array_equal(first["observation.velocity"], [0, 0, 0])
     frames.sample()  # no new image: repeated
     frames.on_image(np.zeros((12, 16, 3), np.uint8))

@@ -138,7 +138,7 @@ def test_round_trip_through_lerobots_loader_and_a_kill_9_mid_episode(tmp_path):
             want = np.stack([f[key] for f in expected])
             assert got[key].dtype == np.float32 and got[key].shape == want.shape
             np.testing.assert_array_equal(got[key], want)  # exact to float32
-        for key in ("observation.hand", "action.tool_target"):
+        for key in ("observation.hand", "tool_target"):
             np.testing.assert_array_equal(got[key], np.stack([f[key] for f in expected]))
         video = got[camera_key("scene")]
         want = np.stack([f[camera_key("scene")] for f in expected]).transpose(0, 3, 1, 2) / 255.0
