@@ -323,6 +323,9 @@ class ClassicalDetector(PartDetector):
             result.rejections.append(Rejection("unknown object", centroid, "; ".join(mismatches)))
             return
         angle = self._angle(contour, kind)
+        if kind == "bolt":
+            # Which end is the head: the bolt's pose is found from a model of its silhouette.
+            features["head_px"] = head_end(contour.reshape(-1, 2).astype(float), angle)
         confidence = purity * math.exp(-0.5 * excess)
         if kind == "nut":
             confidence *= 1.0 if features["vertices"] == 6 else 0.8
@@ -430,6 +433,28 @@ def head_step(outline: np.ndarray, bins: int = 20) -> float:
     if np.isnan(middle).all():
         return 0.0
     return float(np.nanmax(profile[:end]) - np.nanmedian(middle))
+
+
+def head_end(outline_px: np.ndarray, angle: float, bins: int = 20) -> tuple[float, float]:
+    """Pixel at the wider end of an elongated blob (its outline, N x 2 px) along the image
+    direction ``angle`` (rad): a bolt's head end."""
+    axis = np.array([math.cos(angle), math.sin(angle)])
+    centre = outline_px.mean(axis=0)
+    along = (outline_px - centre) @ axis
+    across = (outline_px - centre) @ np.array([-axis[1], axis[0]])
+    low, high = along.min(), along.max()
+    span = max(high - low, 1e-9)
+    index = np.minimum(((along - low) / span * bins).astype(int), bins - 1)
+    top, bottom = np.full(bins, -np.inf), np.full(bins, np.inf)
+    np.maximum.at(top, index, across)
+    np.minimum.at(bottom, index, across)
+    width = np.where(np.isfinite(top), top - bottom, np.nan)
+    end = max(1, bins // 5)
+    head_low = np.nanmax(width[:end]) if not np.isnan(width[:end]).all() else 0.0
+    head_high = np.nanmax(width[-end:]) if not np.isnan(width[-end:]).all() else 0.0
+    tip = low if head_low >= head_high else high
+    point = centre + axis * tip
+    return float(point[0]), float(point[1])
 
 
 def shape_envelope(part, view_slope_max: float) -> dict:
