@@ -49,9 +49,10 @@ def test_palm_follows_the_path_within_10_mm_rms(path_run):
     seen = np.array([r.position for r in results])
     errors = seen - truth
     offset = errors.mean(axis=0)
-    # The constant offset is the seen palm surface in front of the palm centre: about the
-    # palm's half thickness (18 mm) towards the camera (-x in the REP 103 camera frame).
-    assert -0.025 < offset[0] < -0.010 and np.all(np.abs(offset[1:]) < 0.005), offset
+    # The tracker reports the palm centre, palm_half_thickness_m (14 mm) behind the seen
+    # surface: the rendered palm is 18 mm half thick, so a few mm remain towards the camera
+    # (-x in the REP 103 camera frame).
+    assert -0.008 < offset[0] < 0.0 and np.all(np.abs(offset[1:]) < 0.005), offset
     rms = float(np.sqrt(np.mean(np.sum((errors - offset) ** 2, axis=1))))
     assert rms <= 0.010, f"palm error {rms * 1000:.1f} mm RMS"
     # The path spans about 0.5 m in depth: a tracker stuck in place would be far off.
@@ -75,7 +76,7 @@ def test_upright_hand_axes_in_the_camera_frame():
     assert axes[2, 0] > 0.98  # fingers up (REP 103 +z)
     assert axes[0, 2] > 0.98  # back of the hand away from the camera (+x)
     assert hand.hands_num == 1 and hand.hand_types == ("right",)
-    assert np.allclose(hand.position[1:], 0.0, atol=0.003) and 0.775 < hand.position[0] < 0.79
+    assert np.allclose(hand.position[1:], 0.0, atol=0.003) and 0.79 < hand.position[0] < 0.80
 
 
 def test_grab_strength_open_and_fist():

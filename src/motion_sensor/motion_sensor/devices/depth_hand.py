@@ -10,12 +10,18 @@ an operator reaching towards it (the paper's Kinect set-up):
    ``max_blob_area_m2`` is a hand (with its forearm); the nearest is the primary hand, the
    next one a second hand (``hands_num`` 2, used by the gesture clutch). The body, a wall
    or a table merged with the hand is too large and means "no hand".
-2. **Palm centre.** The maximum of the blob's distance transform (cv2.distanceTransform):
-   the palm is the widest part of hand plus forearm, and the search is kept within
-   ``palm_search_depth_m`` of the blob's front so a forearm tilted away cannot win. The
-   centroid of the transform's ridge (within ``ridge_px`` of the maximum) gives a sub-pixel
-   centre; the median depth in a disc around it back-projects it with the intrinsics. This
-   is the seen palm *surface*, a constant palm half-thickness in front of the palm centre.
+2. **Palm centre.** The maximum of the blob's distance transform (cv2.distanceTransform),
+   single lost pixels (speckle, dropout) closed first: the palm is the widest part of hand
+   plus forearm, and the search is kept within ``palm_search_depth_m`` of the blob's front
+   so a forearm tilted away cannot win. After the first frame the search stays within
+   ``track_radius_m`` of the previous palm as long as the blob there is at least 30 % as
+   wide as its widest part (a palm turning edge-on narrows, and must not hand over to the
+   forearm); further away, the hand moved more than that and the whole blob is searched.
+   The centroid of the transform's ridge (within ``ridge_px`` of the maximum) gives a
+   sub-pixel centre; the median depth in a disc around it back-projects it with the
+   intrinsics to the seen palm *surface*, and the palm centre is reported
+   ``palm_half_thickness_m`` behind it along the normal (step 3), met by the pixel's ray
+   at h / cos(tilt), the tilt capped at 60 degrees.
 3. **Orientation** from principal axes: the palm normal is the least-variance axis of the
    3-D points of the palm disc, the hand axis the main axis of the points within
    ``hand_radius_m`` of the centre (made orthogonal to the normal), pointing away from the
@@ -66,6 +72,20 @@ TRACKER_PARAMS = ParamSchema(
             doc="palm centre searched this deep behind the blob's front",
         ),
         Param("ridge_px", 1.0, unit="px", low=0, doc="distance-transform ridge width averaged into the palm centre"),
+        Param(
+            "track_radius_m",
+            0.05,
+            unit="m",
+            low=0,
+            doc="palm searched this close to the previous frame's palm (0: anywhere in the blob)",
+        ),
+        Param(
+            "palm_half_thickness_m",
+            0.014,
+            unit="m",
+            low=0,
+            doc="the palm centre reported lies this far behind the seen palm surface (0: the surface)",
+        ),
         Param("hand_radius_m", 0.1, unit="m", low=0.03, doc="points this close to the palm centre are the hand"),
         Param("palm_faces_camera", True, doc="the palm faces the camera (z, out of the back of the hand, points away)"),
         Param(
@@ -92,12 +112,17 @@ TRACKER_PARAMS = ParamSchema(
 
 OPTICAL_TO_BODY = OPTICAL_TO_REP103  # the name the depth tests and bench use
 
+_CLOSE_KERNEL = np.ones((3, 3), np.uint8)
+# Near the previous palm, a part of the blob this fraction as wide as its widest still
+# counts as the palm; a narrower one means the hand moved further than track_radius_m.
+_TRACK_MIN_WIDTH = 0.3
+
 
 @dataclass
 class DepthHand:
     """One tracking result: the primary hand (REP 103 camera frame) and what else was seen."""
 
-    position: np.ndarray  # seen palm surface (m)
+    position: np.ndarray  # palm centre (m): palm_half_thickness_m behind the seen surface
     orientation: np.ndarray  # unit quaternion (x, y, z, w)
     hand_types: tuple[str, ...]  # one per hand seen, primary first
     hand_id: int
@@ -127,6 +152,7 @@ class DepthHandTracker:
         self._ray_cache = None
         self._last_axis = None  # fingers direction (optical) of the previous frame
         self._last_position = None
+        self._last_surface = None  # seen palm surface of the previous frame (optical)
         self._hand_id = 0
         self.last_reason = ""
 
@@ -134,6 +160,7 @@ class DepthHandTracker:
         """Forget the previous hand (a new stream)."""
         self._last_axis = None
         self._last_position = None
+        self._last_surface = None
 
     def _rays(self, intr: Intrinsics):
         key = (intr.fx, intr.fy, intr.cx, intr.cy, intr.width, intr.height)
@@ -182,6 +209,7 @@ class DepthHandTracker:
 
     def _lost(self):
         self._last_position = None
+        self._last_surface = None
 
     def _hand_type(self, position_opt) -> str:
         mode = self.config["hand_type"]
@@ -247,7 +275,7 @@ class DepthHandTracker:
         return labels, stats, candidates
 
     def _measure(self, depth, labels, stats, label, intr, xs, ys):
-        """(palm surface, optical rotation, grab, pixel, palm radius) of one blob, or None."""
+        """(palm centre, optical rotation, grab) of one blob, or None."""
         c = self.config
         left, top = stats[label, cv2.CC_STAT_LEFT], stats[label, cv2.CC_STAT_TOP]
         width, height = stats[label, cv2.CC_STAT_WIDTH], stats[label, cv2.CC_STAT_HEIGHT]
@@ -257,8 +285,20 @@ class DepthHandTracker:
         blob = labels[t0:t1, l0:l1] == label
         z = np.where(blob, depth[t0:t1, l0:l1], 0.0)
         front = float(z[blob].min())
-        dist = cv2.distanceTransform(blob.view(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-        search = np.where(blob & (z < front + c["palm_search_depth_m"]), dist, 0.0)
+        # Single lost pixels inside the hand (speckle, dropout) would each put a zero in the
+        # distance transform: closed before it.
+        filled = cv2.morphologyEx(blob.view(np.uint8), cv2.MORPH_CLOSE, _CLOSE_KERNEL)
+        dist = cv2.distanceTransform(filled, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        search = np.where(filled.view(bool) & (z < front + c["palm_search_depth_m"]), dist, 0.0)
+        if self._last_surface is not None and c["track_radius_m"] > 0:
+            # Near the previous palm when it is still a palm-wide part of the blob there: a
+            # palm turning edge-on stays the palm instead of jumping to the forearm.
+            last = self._last_surface
+            px, py = xs[l0:l1][None, :] * z, ys[t0:t1][:, None] * z
+            close = (px - last[0]) ** 2 + (py - last[1]) ** 2 + (z - last[2]) ** 2 <= c["track_radius_m"] ** 2
+            local = np.where(close, search, 0.0)
+            if float(local.max()) >= max(1.0, _TRACK_MIN_WIDTH * float(search.max())):
+                search = local
         peak = float(search.max())
         if peak < 1.0:
             self.last_reason = "blob too thin for a palm"
@@ -308,4 +348,10 @@ class DepthHandTracker:
         rotation = np.column_stack((axis, np.cross(normal, axis), normal))
         reach = float((offsets @ axis).max())
         grab = float(np.clip((c["open_extent_m"] - reach) / (c["open_extent_m"] - c["fist_extent_m"]), 0.0, 1.0))
+        # The palm centre lies half a palm thickness behind the seen surface, along the
+        # normal: the ray through the surface point meets it h / cos(tilt) further on (the
+        # tilt capped at 60 degrees, where the normal is least sure).
+        self._last_surface = centre
+        ray = centre / np.linalg.norm(centre)
+        centre = centre + ray * c["palm_half_thickness_m"] / max(abs(float(ray @ normal)), 0.5)
         return centre, rotation, grab

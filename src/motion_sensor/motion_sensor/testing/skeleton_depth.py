@@ -16,7 +16,11 @@ The hand model (``HandModel``; every size in metres):
 - **thenar**: a capsule from the wrist's thumb side to the thumb base;
 - **forearm**: two capsules continuing the palm centre -> wrist axis back from the wrist,
   the wrist (``wrist_radius`` over ``wrist_length``) then the forearm (``forearm_radius``
-  over ``forearm_length``).
+  over ``forearm_length``). The operator faces the camera, so the elbow is never nearer to
+  it than the wrist: where that axis would point less than ``forearm_min_away_deg`` away
+  from the camera, the forearm bends at the wrist (keeping its direction across the image)
+  to point that far away; SHREC's hands tilted with the fingers away from the camera need
+  up to about 25 degrees of wrist extension for this, well within a wrist's range.
 
 Rendering is exact ray casting (each pixel's ray against each primitive, inside the
 primitive's projected bounding box, nearest hit kept), then the sensor (``SensorNoise``):
@@ -69,6 +73,7 @@ class HandModel:
     wrist_length: float = 0.06
     forearm_radius: float = 0.031
     forearm_length: float = 0.22
+    forearm_min_away_deg: float = 10.0
 
 
 @dataclass(frozen=True)
@@ -114,11 +119,22 @@ def hand_primitives(joints: np.ndarray, model: HandModel = HandModel()):
         capsules.append((a, b, h))
         prisms.append((j[PALM], a, b, h))
     capsules.append((wrist_index, j[THUMB[0]], model.thenar_radius))
-    back = _unit(j[WRIST] - j[PALM])
+    back = _forearm_direction(_unit(j[WRIST] - j[PALM]), np.radians(model.forearm_min_away_deg))
     elbow_side = j[WRIST] + back * model.wrist_length
     capsules.append((j[WRIST], elbow_side, model.wrist_radius))
     capsules.append((elbow_side, elbow_side + back * model.forearm_length, model.forearm_radius))
     return capsules, prisms
+
+
+def _forearm_direction(back, min_away):
+    """``back`` (unit, optical), turned about the wrist to point at least ``min_away``
+    (rad) away from the camera (+z), keeping its direction across the image."""
+    if back[2] >= np.sin(min_away):
+        return back
+    across = back[:2]
+    norm = np.linalg.norm(across)
+    across = across / norm if norm > 1e-9 else np.array([0.0, 1.0])
+    return np.array([across[0] * np.cos(min_away), across[1] * np.cos(min_away), np.sin(min_away)])
 
 
 def _pixel_box(points, radius, intr: Intrinsics):
