@@ -9,6 +9,7 @@ problem (an empty list: go):
 - each node's private parameters against its declaration (``interfaces.py``), naming where a
   bad value came from: the command line, or the YAML file the launch file loaded;
 - files the nodes will open: the recording, the SpaceMouse log, the video, the Kinect dump;
+  the folders they write: a recorded dataset's (writable, enough free disk);
 - the robot: the URDF loads, the start pose has one value per joint inside the limits and
   puts the tool inside the workspace box; the driver and its parameters;
 - tools and display: rviz installed, a display for gui:=true or rviz:=true.
@@ -126,6 +127,17 @@ def _check_files(session: _Session, node, values: dict) -> list[str]:
     if node.type == "kinect_driver":
         path = values.get("fakenect_dump", "")
         errors += _exists(path, "Kinect dump directory", session.origin(path, config_file))
+    if node.type == "episode_recorder":
+        # An unwritable dataset folder or a full disk is said before the session starts,
+        # not after the operator has teleoperated a whole episode.
+        from motion_apps.dataset_store import check_dataset_folder
+        from motion_apps.interfaces import EPISODE_RECORDER, PROJECT_ROOT
+
+        path = values.get("dataset") or EPISODE_RECORDER.params.defaults()["dataset"]
+        free = values.get("min_free_mb", EPISODE_RECORDER.params.defaults()["min_free_mb"])
+        problem = check_dataset_folder(os.path.join(PROJECT_ROOT, os.path.expanduser(path)), float(free))
+        if problem:
+            errors.append(f"{session.origin(path, config_file)}: {problem}")
     if node.type == "kitting_trials" and values.get("kit_order"):
         path = values["kit_order"]
         origin = session.origin(path, config_file)

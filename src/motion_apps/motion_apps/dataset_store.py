@@ -94,23 +94,23 @@ def _fsync_dir(folder: str) -> None:
 
 
 def check_dataset_folder(path: str, min_free_mb: float) -> str | None:
-    """Why episodes cannot be written to the dataset ``path`` (a folder that is not writable,
-    or less than ``min_free_mb`` free on its file system), or None when they can. Creates
-    the parent folder if it is missing."""
+    """Why episodes cannot be written to the dataset ``path`` (a folder that cannot be
+    created or written, or less than ``min_free_mb`` free on its file system), or None when
+    they can. Creates nothing: the nearest existing folder on the way is what is checked."""
     path = os.path.abspath(os.path.expanduser(path))
-    parent = os.path.dirname(path)
-    try:
-        os.makedirs(parent, exist_ok=True)
-    except OSError as exc:
-        return f"dataset folder {path}: cannot create {parent}: {exc.strerror}"
     if os.path.lexists(path) and not os.path.isdir(path):
         return f"dataset folder {path}: exists and is not a folder (nor a link to one)"
+    existing = os.path.dirname(path)
+    while not os.path.exists(existing):
+        existing = os.path.dirname(existing)
+    if not os.path.isdir(existing):
+        return f"dataset folder {path}: cannot be created, {existing} is not a folder"
     try:
-        with tempfile.NamedTemporaryFile(dir=parent, prefix=".write-check-"):
+        with tempfile.NamedTemporaryFile(dir=existing, prefix=".write-check-"):
             pass
     except OSError as exc:
-        return f"dataset folder {path}: {parent} is not writable ({exc.strerror})"
-    free_mb = shutil.disk_usage(parent).free / 1e6
+        return f"dataset folder {path}: {existing} is not writable ({exc.strerror})"
+    free_mb = shutil.disk_usage(existing).free / 1e6
     if free_mb < min_free_mb:
         return (
             f"dataset folder {path}: only {free_mb:.0f} MB free on its disk, "

@@ -136,6 +136,7 @@ def test_store_adopts_a_plain_lerobot_folder_and_refuses_other_folders(tmp_path)
 
 def test_folder_check_names_unwritable_folders_and_full_disks(tmp_path, monkeypatch):
     assert check_dataset_folder(str(tmp_path / "sets" / "a"), 1) is None
+    assert not (tmp_path / "sets").exists()  # a check creates nothing
     locked = tmp_path / "locked"
     locked.mkdir()
     locked.chmod(0o500)
@@ -156,6 +157,7 @@ def test_folder_check_names_unwritable_folders_and_full_disks(tmp_path, monkeypa
     assert "only 1 MB free" in message and "500 MB" in message
     (tmp_path / "file").write_text("x")
     assert "not a folder" in check_dataset_folder(str(tmp_path / "file"), 0)
+    assert "is not a folder" in check_dataset_folder(str(tmp_path / "file" / "set"), 0)
 
 
 # -- frames -----------------------------------------------------------------------------

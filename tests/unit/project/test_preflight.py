@@ -86,3 +86,16 @@ def test_your_own_robot_driver_and_device_pass():
         "device:=circle_device:CircleDevice",
     ]
     assert check_session(TELEOP, args) == []
+
+
+def test_a_dataset_folder_that_cannot_be_written_is_refused_before_the_start(tmp_path, monkeypatch):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("x")
+    errors = check_session(TELEOP, [f"dataset:={blocker}/set", "dataset_start:=true"])
+    assert len(errors) == 1 and errors[0].startswith(f"command line dataset:={blocker}/set: dataset folder")
+    assert "is not a folder" in errors[0]
+    import shutil
+
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: shutil._ntuple_diskusage(10**9, 10**9 - 10**7, 10**7))
+    errors = check_session(TELEOP, [f"dataset:={tmp_path}/set"])
+    assert len(errors) == 1 and "only 10 MB free" in errors[0]
