@@ -1,0 +1,50 @@
+"""scripts/record_demo at a reduced length: one gesture-taught pick-and-place session
+recorded as a LeRobot episode with the scene camera, read back by LeRobot's loader and
+replayed on a fresh simulated arm; the summary, the picture and the dataset are checked.
+Its own master on a free port. About 100 s (one teach session, LeRobot's loader, a replay).
+"""
+
+import json
+import os
+import signal
+import socket
+import subprocess
+
+import pytest
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+TIMEOUT = 600  # s, on a loaded 2-core machine
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_record_demo_one_episode(tmp_path):
+    env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{free_port()}", ROS_HOME=str(tmp_path / "ros"))
+    command = [os.path.join(ROOT, "scripts", "record_demo"), "--episodes", "1", "--output", str(tmp_path)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=ROOT)
+    try:
+        out, _ = process.communicate(timeout=TIMEOUT)
+    except subprocess.TimeoutExpired:
+        process.send_signal(signal.SIGINT)
+        out, _ = process.communicate(timeout=60)
+        pytest.fail(f"record_demo did not end within {TIMEOUT} s:\n{out}")
+    assert process.returncode == 0, out
+    runs = os.listdir(tmp_path / "runs")
+    run = tmp_path / "runs" / next(name for name in runs if name.startswith("record_demo-"))
+    with open(run / "record_demo.json", encoding="utf-8") as stream:
+        summary = json.load(stream)
+    assert summary["episodes"] == 1 and summary["fps"] == 10
+    assert summary["frames"] >= 50, summary  # the teaching takes well over 5 s
+    assert summary["cameras"] == ["observation.images.scene"]
+    assert summary["dropped_frames"] == 0
+    assert summary["replay"]["compared"] == summary["frames"] - 1, summary["replay"]
+    assert summary["replay"]["refused"] == 0
+    with open(run / "record_demo.png", "rb") as stream:
+        assert stream.read(8) == b"\x89PNG\r\n\x1a\n"
+    assert "=== recorded dataset ===" in out and "episodes                 : 1" in out
+    records = json.loads((run / "dataset" / "meta" / "teleop_episodes.json").read_text())
+    assert len(records) == 1 and records[0]["camera_new_frames"] > 0
