@@ -29,7 +29,7 @@ class TrainConfig:
     """Training settings; the defaults trained the shipped model."""
 
     filters: int = 32
-    epochs: int = 160
+    epochs: int = 100
     batch: int = 64
     lr: float = 2e-3
     weight_decay: float = 1e-4

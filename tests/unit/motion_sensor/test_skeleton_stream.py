@@ -1,0 +1,177 @@
+"""Skeletons through the framework without ROS: the Leap parser's skeletons, the SHREC'17
+stream device, the sequencer's skeleton gate, and the spotter's idle gate, non-maximum
+suppression and refractory period (with a stand-in classifier), then the spotter with the
+shipped model on a stream of real sequences (tests/data/shrec17_slice.npz)."""
+
+import os
+
+import numpy as np
+import pytest
+
+from motion_sensor.devices.device import DeviceRunner
+from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording
+from motion_sensor.devices.shrec_stream import ShrecStreamDevice
+from motion_sensor.errors import MotionSensorError
+from motion_sensor.gestures.skeleton_classifier import SkeletonResult
+from motion_sensor.gestures.skeleton_dataset import CLASSES_14, load_skeleton_dataset
+from motion_sensor.gestures.skeleton_spotter import SkeletonSpotter, motion_extent
+from motion_sensor.gestures.skeleton_stream import build_stream
+from motion_sensor.sequencing.skeleton_gate import SkeletonGate
+from motion_sensor.skeleton_joints import JOINT_NAMES
+from motion_sensor.skeleton_sample import SkeletonSample
+
+from ..conftest import DATA
+
+SLICE = os.path.join(DATA, "shrec17_slice.npz")
+
+
+class FakeClock:
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+    def sleep(self, seconds):
+        self.now += seconds
+
+
+def test_leap_frames_carry_their_skeleton():
+    recording = read_recording(os.path.join(DATA, "grab.jsonl.gz"))
+    frame = next(f for f in recording.frames if f.hands)
+    sample = frame_to_sample(frame, stamp=5.0)
+    assert len(sample.skeletons) == len(frame.hands)
+    joints = sample.skeletons[0].joints
+    assert joints.shape == (22, 3) and sample.skeletons[0].problem() is None
+    np.testing.assert_allclose(joints[1], sample.position)  # the palm joint is the palm
+    np.testing.assert_allclose(joints[JOINT_NAMES.index("index_tip")], sample.index_tip)
+    span = np.linalg.norm(joints[JOINT_NAMES.index("middle_tip")] - joints[0])
+    assert 0.08 < span < 0.3  # a hand, in metres
+
+
+def test_shrec_stream_device_plays_the_file_as_a_live_hand():
+    clock = FakeClock()
+    config = {"sequences_file": SLICE, "labels": ["grab", "shake"], "limit": 3, "idle_s": 1.0, "seed": -1}
+    device = ShrecStreamDevice(ShrecStreamDevice.params.validate(config, "test"), clock=clock, sleep=clock.sleep)
+    assert [label for label, *_ in device.truth] == ["grab", "grab", "shake"]
+    published = []
+    runner = DeviceRunner(device, published.append, lambda: False, sleep=clock.sleep, clock=clock)
+    assert runner.run() is True  # finished
+    assert len(published) == len(device.stamps)
+    first = published[0]
+    assert first.skeletons[0].joints.shape == (22, 3) and first.device == "shrec_stream"
+    data = load_skeleton_dataset(SLICE)
+    np.testing.assert_allclose(first.skeletons[0].joints, data.sequences[0][0], atol=1e-9)
+    np.testing.assert_allclose(first.position, data.sequences[0][0][1])
+    # REP 103: the fingers of a hand held up before the camera are above the wrist.
+    assert np.mean([s.skeletons[0].joints[9, 2] - s.skeletons[0].joints[0, 2] for s in published]) > 0
+    stamps = [s.stamp for s in published]
+    assert np.all(np.diff(stamps) > 0) and stamps[-1] - stamps[0] == pytest.approx(device.stamps[-1], abs=1e-6)
+    with pytest.raises(MotionSensorError, match="unknown gestures"):
+        ShrecStreamDevice(ShrecStreamDevice.params.validate({"sequences_file": SLICE, "labels": ["wave"]}, "test"))
+
+
+def _skeleton(stamp, offset=0.0):
+    return SkeletonSample(stamp, np.full((22, 3), offset) + np.arange(22)[:, None] * 0.01)
+
+
+def test_gate_passes_a_skeleton_only_with_its_palm_frame():
+    gate = SkeletonGate()
+    assert gate.on_skeleton(_skeleton(1.0)) == []  # waits for its palm frame
+    assert [s.stamp for s in gate.on_palm(1.0)] == [1.0]
+    assert [s.stamp for s in gate.on_skeleton(_skeleton(1.0, 0.5))] == [1.0]  # second hand, after the palm
+    gate.on_skeleton(_skeleton(2.0))  # its palm frame is dropped by the sequencer ...
+    gate.on_skeleton(_skeleton(3.0))
+    assert [s.stamp for s in gate.on_palm(3.0)] == [3.0]  # ... so it never passes
+    assert gate.counters["dropped_with_palm"] == 1
+    assert gate.on_skeleton(_skeleton(2.5)) == []  # late, older than a passed frame
+    bad = _skeleton(4.0)
+    bad.joints[3, 0] = np.nan
+    assert gate.on_skeleton(bad) == [] and gate.counters["dropped_invalid"] == 1
+    assert gate.counters["passed"] == 3
+
+
+class StandIn:
+    """Labels a window 'grab' (confident) when the hand's x moved more than 5 cm in it."""
+
+    def __init__(self):
+        self.calls = 0
+
+    def classify_batch(self, sequences):
+        self.calls += 1
+        out = []
+        for seq in sequences:
+            prob = np.full(14, 0.01)
+            moved = np.ptp(seq[:, 1, 0]) > 0.05
+            prob[0 if moved else 13] = 0.9 if moved else 0.5
+            out.append(SkeletonResult(prob / prob.sum() * (0.99 if moved else 1.0), np.full(28, 1 / 28)))
+        return out
+
+
+def _hand_stream(moves, rate=30.0):
+    """Still hand with tremor, and a 0.6 s, 15 cm move at each time in ``moves``."""
+    rng = np.random.default_rng(3)
+    stamps = np.arange(0.0, 12.0, 1.0 / rate)
+    base = np.arange(66, dtype=float).reshape(22, 3) * 0.005
+    frames = []
+    for t in stamps:
+        shift = sum(0.15 * np.clip((t - m) / 0.6, 0.0, 1.0) for m in moves)
+        curl = sum(0.02 * np.sin(np.pi * np.clip((t - m) / 0.6, 0.0, 1.0)) for m in moves)
+        frame = base + rng.normal(0.0, 0.0005, base.shape)
+        frame[:, 0] += shift
+        frame[2:, 2] += curl
+        frames.append(frame)
+    return stamps, frames
+
+
+def test_spotter_idle_gate_nms_and_refractory():
+    stand_in = StandIn()
+    spotter = SkeletonSpotter(stand_in, {"min_confidence": 0.8})
+    stamps, frames = _hand_stream(moves=[3.0, 8.0])
+    events = []
+    for stamp, frame in zip(stamps, frames, strict=True):
+        events.extend(spotter.update(stamp, frame))
+    events.extend(spotter.finish())
+    assert [e.name for e in events] == ["grab", "grab"]  # one event per move, not one per window
+    for event, move in zip(events, (3.0, 8.0), strict=True):
+        assert event.info["start"] <= move + 0.6 and event.info["end"] >= move  # it overlaps the move
+    assert spotter.counters["idle"] > 0  # the still hand was never classified as a gesture
+    still = SkeletonSpotter(StandIn())
+    for stamp, frame in zip(*_hand_stream(moves=[]), strict=True):
+        assert still.update(stamp, frame) == []
+    assert still.counters["candidates"] == 0
+    assert motion_extent(np.array(frames[:30])) < 0.002  # tremor
+    assert motion_extent(np.array(frames[90:108])) > 0.03  # the move
+
+
+def test_spotter_rejects_bad_settings_and_survives_gaps():
+    with pytest.raises(ValueError, match="unknown labels"):
+        SkeletonSpotter(StandIn(), {"labels": ["wave"]})
+    spotter = SkeletonSpotter(StandIn())
+    stamps, frames = _hand_stream(moves=[3.0])
+    for stamp, frame in zip(stamps[:60], frames[:60], strict=True):
+        spotter.update(stamp, frame)
+    spotter.update(stamps[10], frames[10])  # out of order: ignored
+    assert spotter.counters["out_of_order"] == 1
+    spotter.update(stamps[59] + 1.0, frames[59])  # the hand was lost: history cleared
+    assert spotter.counters["gaps"] == 1
+
+
+def test_spotter_with_the_shipped_model_on_real_sequences():
+    from motion_sensor.gestures.skeleton_classifier import SkeletonClassifier
+
+    data = load_skeleton_dataset(SLICE)
+    chosen = [i for i in range(len(data)) if data.subject[i] == 19]
+    stamps, joints, truth = build_stream(
+        [data.sequences[i] for i in chosen],
+        [CLASSES_14[data.label14[i]] for i in chosen],
+        np.random.default_rng(7),
+    )
+    spotter = SkeletonSpotter(SkeletonClassifier())
+    events = []
+    for stamp, frame in zip(stamps, joints, strict=True):
+        events.extend(spotter.update(stamp, frame))
+    events.extend(spotter.finish())
+    hits = sum(any(e.name == label and start <= e.stamp <= end + 1.0 for e in events) for label, start, end in truth)
+    assert hits >= 0.7 * len(truth)
+    assert len(events) <= len(truth) + 2
