@@ -47,7 +47,7 @@ SWEEPS = {
     "one_euro_classic": (
         "one_euro",
         [
-            {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": 0.0}
+            {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": 0.0, "speed_window": 0.0}
             for m in (0.3, 1.0, 3.0)
             for b in (10.0, 20.0, 40.0, 80.0, 160.0, 320.0)
             for d in (0.3, 1.0, 3.0)
@@ -56,7 +56,7 @@ SWEEPS = {
     "one_euro": (
         "one_euro",
         [
-            {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": v}
+            {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": v, "speed_window": 0.0}
             for m in (0.3, 0.5, 1.0, 2.0, 3.0, 5.0)
             for b in (320.0, 640.0, 1280.0)
             for d in (1.0, 2.0, 4.0)
@@ -65,7 +65,22 @@ SWEEPS = {
     ),
     "one_euro+deadband": (
         "one_euro",
-        [{"mincutoff": m, "deadband": db} for m in (1.0, 3.0) for db in (0.0002, 0.0005, 0.001, 0.002)],
+        [
+            {"mincutoff": m, "deadband": db, "speed_window": 0.0}
+            for m in (1.0, 3.0)
+            for db in (0.0002, 0.0005, 0.001, 0.002)
+        ],
+    ),
+    # The shipped one_euro: speed as the net move over 0.2 s.
+    "one_euro_window": (
+        "one_euro",
+        [
+            {"mincutoff": m, "beta": b, "speed_threshold": v, "speed_window": 0.2, "lag_compensation": c}
+            for m in (2.0, 3.0, 4.0)
+            for b in (640.0, 1280.0)
+            for v in (0.06, 0.08, 0.1)
+            for c in (0.0, 0.3)
+        ],
     ),
     "kalman_cv": (
         "kalman",
@@ -205,7 +220,7 @@ def main():
     mean10 = next(c for c in curves["mean"] if c["params"]["queue_size"] == 10)
     results["mean10"] = mean10
     verdict = {}
-    for curve in ("one_euro_classic", "one_euro", "one_euro+deadband", "kalman_cv", "kalman"):
+    for curve in ("one_euro_classic", "one_euro", "one_euro+deadband", "one_euro_window", "kalman_cv", "kalman"):
         at_mean10 = lag_at_jitter(curves[curve], mean10["jitter_mm"])
         at_leap = lag_at_jitter(curves[curve], results["leap_stabilized"]["jitter_mm"])
         verdict[curve] = {
@@ -289,6 +304,7 @@ def plot(results, path):
         "one_euro_classic": ("s--", "tab:orange"),
         "one_euro": ("s-", "tab:orange"),
         "one_euro+deadband": ("D:", "tab:red"),
+        "one_euro_window": ("v-", "tab:purple"),
         "kalman_cv": ("^--", "tab:green"),
         "kalman": ("^-", "tab:green"),
     }
