@@ -9,6 +9,9 @@ LeRobot features (float32 unless said):
 - ``observation.tool_pose``: measured tool pose, x y z (m) qx qy qz qw, base frame;
 - ``observation.hand``: the operator's primary hand: palm x y z (m) qx qy qz qw (device
   frame), grab and pinch strength (0..1, -1 unknown), visible (1/0);
+- ``observation.hand_skeleton``: the primary hand's 22 canonical joints
+  (``motion_sensor.skeleton_joints.JOINT_NAMES``), x y z each (m, device frame), then
+  visible (1/0; 0 and the last skeleton seen while the device gives none);
 - ``observation.images.<camera>``: the camera image (video, uint8 RGB);
 - ``action``: the joint targets the core commanded (rad), then the gripper command (the
   server's gripper state after each accepted SET_GRIPPER); before the first command, the
@@ -29,9 +32,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["EpisodeFrames", "FrameCounts", "HAND_NAMES", "POSE_NAMES", "camera_key", "rgb_from_image"]
+from motion_sensor.skeleton_joints import JOINT_NAMES
+
+__all__ = [
+    "EpisodeFrames",
+    "FrameCounts",
+    "HAND_NAMES",
+    "POSE_NAMES",
+    "SKELETON_NAMES",
+    "camera_key",
+    "rgb_from_image",
+]
 
 POSE_NAMES = ["x", "y", "z", "qx", "qy", "qz", "qw"]
+SKELETON_NAMES = [f"{joint}_{axis}" for joint in JOINT_NAMES for axis in "xyz"] + ["visible"]
 HAND_NAMES = ["palm_x", "palm_y", "palm_z", "palm_qx", "palm_qy", "palm_qz", "palm_qw", "grab", "pinch", "visible"]
 
 
@@ -89,6 +103,7 @@ class EpisodeFrames:
         self.tool = None
         self.gripper = 0.0
         self.hand = np.array([0, 0, 0, 0, 0, 0, 1, -1, -1, 0], dtype=np.float32)
+        self.skeleton = np.zeros(len(SKELETON_NAMES), dtype=np.float32)
         self.command = None
         self.target = None
         self.image = None
@@ -118,6 +133,21 @@ class EpisodeFrames:
         else:
             values = list(self.hand[:9]) + [0.0]  # the last pose seen, marked not visible
         self.hand = np.asarray(values, dtype=np.float32)
+
+    def on_skeleton(self, names, points) -> None:
+        """The primary hand's skeleton: joint names and (x, y, z) points; joints the device
+        does not give stay 0. An empty skeleton marks the hand not visible."""
+        if not len(points):
+            self.skeleton[-1] = 0.0
+            return
+        values = np.zeros(len(SKELETON_NAMES), dtype=np.float32)
+        index = {name: i for i, name in enumerate(JOINT_NAMES)}
+        for name, point in zip(names, points):
+            i = index.get(name)
+            if i is not None:
+                values[3 * i : 3 * i + 3] = point
+        values[-1] = 1.0
+        self.skeleton = values
 
     def on_command(self, names, positions) -> None:
         if self.joint_names is not None and list(names) and list(names) != self.joint_names:
@@ -159,6 +189,11 @@ class EpisodeFrames:
             "observation.velocity": {"dtype": "float32", "shape": [len(joints)], "names": joints},
             "observation.tool_pose": {"dtype": "float32", "shape": [7], "names": POSE_NAMES},
             "observation.hand": {"dtype": "float32", "shape": [len(HAND_NAMES)], "names": HAND_NAMES},
+            "observation.hand_skeleton": {
+                "dtype": "float32",
+                "shape": [len(SKELETON_NAMES)],
+                "names": SKELETON_NAMES,
+            },
             "action": {"dtype": "float32", "shape": [len(with_gripper)], "names": with_gripper},
             "tool_target": {"dtype": "float32", "shape": [7], "names": POSE_NAMES},
         }
@@ -187,6 +222,7 @@ class EpisodeFrames:
             "observation.velocity": self.velocities.copy(),
             "observation.tool_pose": self.tool.copy(),
             "observation.hand": self.hand.copy(),
+            "observation.hand_skeleton": self.skeleton.copy(),
             "action": np.concatenate([joints_target, gripper]),
             "tool_target": (self.target if self.target is not None else self.tool).copy(),
         }

@@ -168,6 +168,12 @@ EPISODE_RECORDER = NodeInterface(
         Topic("motion_controller/tool_pose", _POSE, "the measured tool pose"),
         Topic("motion_controller/gripper", "std_msgs/Bool", "the gripper state"),
         Topic("motion_sensor/hand", "motion_sensor/hand", "the operator's hand"),
+        Topic(
+            "motion_sensor/hand_skeleton",
+            "motion_sensor/HandSkeleton",
+            "the operator's hand skeleton (devices that see fingers)",
+            optional=True,
+        ),
         Topic("motion_commander/command", "sensor_msgs/JointState", "the joint targets sent (the action)"),
         Topic("motion_commander/target", _POSE, "the core's tool target"),
         Topic("camera/image_raw", "sensor_msgs/Image", "the camera (with ~camera)", optional=True),

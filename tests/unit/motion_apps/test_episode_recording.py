@@ -210,6 +210,21 @@ def test_frames_keep_the_last_hand_pose_when_the_hand_leaves():
     np.testing.assert_allclose(frames.hand, [0.1, 0.2, 0.3, 0, 0, 0, 1, 0.5, 0.25, 0])
 
 
+def test_frames_hold_the_hand_skeleton_by_joint_name():
+    frames = EpisodeFrames()
+    frames.on_joints(JOINTS, [1, 2, 3], [0, 0, 0])
+    frames.on_tool([0, 0, 1], [0, 0, 0, 1])
+    assert not frames.sample()["observation.hand_skeleton"].any()  # no device skeleton: zeros, not visible
+    frames.on_skeleton(["palm", "thumb_tip", "no_such_joint"], [(1, 2, 3), (4, 5, 6), (7, 8, 9)])
+    skeleton = frames.sample()["observation.hand_skeleton"]
+    names = frames.features()["observation.hand_skeleton"]["names"]
+    assert len(skeleton) == len(names) == 67
+    assert skeleton[names.index("palm_y")] == 2 and skeleton[names.index("thumb_tip_z")] == 6
+    assert skeleton[-1] == 1 and skeleton.sum() == 1 + 2 + 3 + 4 + 5 + 6 + 1
+    frames.on_skeleton([], [])
+    assert frames.sample()["observation.hand_skeleton"][-1] == 0
+
+
 def test_frames_ignore_another_arms_joints():
     frames = EpisodeFrames()
     frames.on_joints(JOINTS, [1, 2, 3], [0, 0, 0])
