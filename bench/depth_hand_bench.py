@@ -9,17 +9,35 @@ image-wide operation the method cannot do without). Position error: RMS distance
 the tracked palm and the true palm centre after removing their mean difference (the seen
 palm surface lies a constant half palm thickness in front of the centre).
 
-Run: bench/run depth_hand_bench [--frames 300] [--seed 1] [--noise 0.0015]
+Real hand motion (``real_motion`` in the results; skipped without ../shared): the SHREC'17
+training skeletons of a fixed, seeded subset (bench/shrec_hands.py: subjects split in half,
+a tuning set and a held-out evaluation set, two sequences of different gestures per subject)
+rendered by an independent hand model built from each skeleton
+(motion_sensor.testing.skeleton_depth: capsules, a palm slab, a forearm, Kinect-like noise,
+quantisation and dropout at silhouettes) and tracked frame by frame, the tracker reset at
+each sequence. Truth: SHREC's palm centre joint. Errors are given three ways: per sequence
+after removing that sequence's mean difference (the goal's figure: a rigid alignment, as a
+teleoperation clutch makes every motion relative), after removing one offset over all
+frames, and raw. A hand frame is one whose palm centre lies in the image and the working
+volume; found = tracked in such a frame. For scale, a naive nearest-blob tracker on the same
+frames: the 3-D centroid of the pixels within 10 cm behind the 4th nearest one.
+``--reference FILE`` also runs another version of depth_hand.py (e.g. the one before a
+change, ``git show REV:src/motion_sensor/motion_sensor/devices/depth_hand.py > FILE``) on
+every frame of both parts, timed alongside, for before/after figures from one run.
+
+Run: bench/run depth_hand_bench [--frames 300] [--seed 1] [--noise 0.0015] [--reference FILE]
 Writes bench/results/depth_hand_bench.json and depth_hand_path.png.
 """
 
 import argparse
+import importlib.util
 import os
 import sys
 import time
 
 import numpy as np
 
+import shrec_hands
 from bench_common import RESULTS, ROOT, write_results
 
 for package in ("motion_sensor", "motion_common"):
@@ -28,10 +46,14 @@ for package in ("motion_sensor", "motion_common"):
 import cv2  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
-from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY, DepthHandTracker  # noqa: E402
+from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY, TRACKER_PARAMS, DepthHandTracker  # noqa: E402
 from motion_sensor.devices.depth_image import decode_depth, encode_depth_mm  # noqa: E402
+from motion_sensor.testing.skeleton_depth import PALM, render_skeleton  # noqa: E402
 from motion_sensor.testing.synthetic_depth import DEFAULT_INTRINSICS as INTR  # noqa: E402
 from motion_sensor.testing.synthetic_depth import hand_path, render_hand  # noqa: E402
+
+TRACKER_DEFAULTS = TRACKER_PARAMS.defaults()
+NEAREST_BAND_M = 0.10  # the nearest-blob baseline's band behind the nearest pixel
 
 
 def stats_ms(samples):
@@ -41,6 +63,134 @@ def stats_ms(samples):
         "p99_ms": round(float(np.percentile(ms, 99)), 3),
         "max_ms": round(float(ms.max()), 3),
     }
+
+
+def load_reference(path):
+    """DepthHandTracker from another version of depth_hand.py, or None."""
+    if not path:
+        return None
+    spec = importlib.util.spec_from_file_location("reference_depth_hand", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.DepthHandTracker
+
+
+def nearest_blob(depth, tracker_config):
+    """The naive baseline's palm (optical, m): centroid of the pixels near the nearest one."""
+    inside = (depth > tracker_config["min_depth_m"]) & (depth < tracker_config["max_depth_m"])
+    values = depth[inside]
+    if values.size < 4:
+        return None
+    near = float(np.partition(values, 3)[3])
+    v, u = np.nonzero(inside & (depth < near + NEAREST_BAND_M))
+    z = depth[v, u].astype(float)
+    return np.array([np.mean((u - INTR.cx) / INTR.fx * z), np.mean((v - INTR.cy) / INTR.fy * z), np.mean(z)])
+
+
+def path_errors(seen, truth, sequence, hand):
+    """Palm error figures (mm) of one tracker over frames: found fraction of hand frames and
+    RMS/p95/max per sequence aligned, globally aligned and raw."""
+    found = ~np.isnan(seen[:, 0])
+    ok = found & hand
+    error = seen - truth
+    aligned = np.full(len(error), np.nan)
+    for s in np.unique(sequence[ok]):
+        mine = ok & (sequence == s)
+        aligned[mine] = np.linalg.norm(error[mine] - error[mine].mean(axis=0), axis=1)
+    offset = error[ok].mean(axis=0)
+    global_aligned = np.linalg.norm(error[ok] - offset, axis=1)
+    raw = np.linalg.norm(error[ok], axis=1)
+
+    def figures(values):
+        values = np.asarray(values) * 1000
+        return {
+            "rms_mm": round(float(np.sqrt(np.mean(values**2))), 2),
+            "p95_mm": round(float(np.percentile(values, 95)), 2),
+            "max_mm": round(float(values.max()), 2),
+        }
+
+    return {
+        "found_fraction": round(float(ok.sum() / max(hand.sum(), 1)), 4),
+        "per_sequence_aligned": figures(aligned[ok]),
+        "globally_aligned": dict(figures(global_aligned), offset_mm=[round(float(v) * 1000, 2) for v in offset]),
+        "raw": figures(raw),
+    }
+
+
+def real_motion(args, reference):
+    """The real-motion part (see the module), or a 'skipped' string."""
+    data = shrec_hands.load()
+    if data is None:
+        return f"skipped: {shrec_hands.SHREC} not found (../shared absent)"
+    tune, held_out = shrec_hands.select(data, seed=args.shrec_seed, per_subject=args.per_subject)
+    rng = np.random.default_rng(args.seed)
+    config = TRACKER_DEFAULTS
+    out = {
+        "source": "SHREC'17 training split (../shared/data/shrec17_train), skeletons rendered by "
+        "motion_sensor.testing.skeleton_depth with its default hand model and sensor noise",
+        "selection_seed": args.shrec_seed,
+        "sequences_per_subject": args.per_subject,
+        "truth": "SHREC joint 1 (palm centre), on the rendered palm slab's mid-plane",
+    }
+    total = sum(len(s.joints) for s in tune + held_out)
+    done = 0
+    for name, sequences in (("tuning_set", tune), ("evaluation_set", held_out)):
+        truth, seqs, hand = [], [], []
+        seen = {"tracker": [], "nearest_blob": [], "reference": []}
+        costs = {"tracker": [], "reference": []}
+        for index, sequence in enumerate(sequences):
+            tracker = DepthHandTracker({})
+            before = reference({}) if reference else None
+            for joints in shrec_hands.place(sequence.joints):
+                data16 = encode_depth_mm(render_skeleton(joints, INTR, rng=rng))
+                palm = joints[PALM]
+                u = INTR.cx + INTR.fx * palm[0] / palm[2]
+                v = INTR.cy + INTR.fy * palm[1] / palm[2]
+                hand.append(
+                    0 <= u < INTR.width
+                    and 0 <= v < INTR.height
+                    and config["min_depth_m"] < palm[2] < config["max_depth_m"]
+                )
+                truth.append(palm)
+                seqs.append(index)
+                for key, which in (("tracker", tracker), ("reference", before)):
+                    if which is None:
+                        continue
+                    start = time.perf_counter()
+                    depth = decode_depth("16UC1", INTR.width, INTR.height, INTR.width * 2, data16)
+                    result = which.track(depth, INTR)
+                    costs[key].append(time.perf_counter() - start)
+                    seen[key].append(OPTICAL_TO_BODY.T @ result.position if result is not None else [np.nan] * 3)
+                depth = decode_depth("16UC1", INTR.width, INTR.height, INTR.width * 2, data16)
+                blob = nearest_blob(depth, config)
+                seen["nearest_blob"].append(blob if blob is not None else [np.nan] * 3)
+                done += 1
+            print(f"  real motion: {done}/{total} frames", flush=True)
+        truth, seqs, hand = np.array(truth), np.array(seqs), np.array(hand, bool)
+        part = {
+            "sequences": [s.describe() for s in sequences],
+            "subjects": sorted({s.subject for s in sequences}),
+            "frames": len(truth),
+            "hand_frames": int(hand.sum()),
+            "tracker": path_errors(np.array(seen["tracker"], float), truth, seqs, hand),
+            "nearest_blob_baseline": path_errors(np.array(seen["nearest_blob"], float), truth, seqs, hand),
+        }
+        part["tracker"]["per_frame_decode_and_track"] = stats_ms(costs["tracker"])
+        if reference:
+            part["reference"] = path_errors(np.array(seen["reference"], float), truth, seqs, hand)
+            part["reference"]["per_frame_decode_and_track"] = stats_ms(costs["reference"])
+        out[name] = part
+    goals = {"per_sequence_rms_mm_max": 6.0, "per_sequence_p95_mm_max": 12.0, "found_fraction_min": 0.95}
+    out["goals"] = goals
+    out["goals_met"] = {
+        name: bool(
+            out[name]["tracker"]["per_sequence_aligned"]["rms_mm"] <= goals["per_sequence_rms_mm_max"]
+            and out[name]["tracker"]["per_sequence_aligned"]["p95_mm"] <= goals["per_sequence_p95_mm_max"]
+            and out[name]["tracker"]["found_fraction"] >= goals["found_fraction_min"]
+        )
+        for name in ("tuning_set", "evaluation_set")
+    }
+    return out
 
 
 def plot(truth, seen, path):
@@ -77,7 +227,12 @@ def main():
     parser.add_argument(
         "--repeats", type=int, default=3, help="timing passes over the frames (the best of each is kept)"
     )
+    parser.add_argument("--shrec-seed", type=int, default=28, help="seed of the real-motion subset")
+    parser.add_argument("--per-subject", type=int, default=2, help="real-motion sequences per subject")
+    parser.add_argument("--reference", help="another depth_hand.py to run alongside (before/after)")
+    parser.add_argument("--skip-real", action="store_true", help="only the synthetic part")
     args = parser.parse_args()
+    reference = load_reference(args.reference)
 
     poses = hand_path(args.frames, seed=args.seed)
     rng = np.random.default_rng(args.seed)
@@ -92,15 +247,21 @@ def main():
 
     costs = np.full(args.frames, np.inf)
     baseline = np.full(args.frames, np.inf)
-    results_per_frame = None
+    reference_costs = np.full(args.frames, np.inf)
+    results_per_frame = reference_per_frame = None
     for _ in range(args.repeats):
         tracker = DepthHandTracker({})
-        out = []
+        before = reference({}) if reference else None
+        out, out_before = [], []
         for i, data in enumerate(images):
             start = time.perf_counter()
             out.append(frame(data, tracker))
             costs[i] = min(costs[i], time.perf_counter() - start)
-        results_per_frame = out
+            if before is not None:
+                start = time.perf_counter()
+                out_before.append(frame(data, before))
+                reference_costs[i] = min(reference_costs[i], time.perf_counter() - start)
+        results_per_frame, reference_per_frame = out, out_before
         for i, data in enumerate(images):
             depth = decode_depth("16UC1", INTR.width, INTR.height, INTR.width * 2, data)
             mask = ((depth > 0.35) & (depth < 1.3)).view(np.uint8)
@@ -148,6 +309,21 @@ def main():
         "plot": png,
     }
     results["goals_met"] = bool(cost["p99_ms"] <= 10.0 and results["position_rms_mm"] <= 10.0)
+    if reference:
+        ok_before = np.array([r is not None for r in reference_per_frame])
+        seen_before = np.array([r.position if r is not None else [np.nan] * 3 for r in reference_per_frame])
+        diff = seen_before[ok_before] - truth[ok_before]
+        residual_before = np.linalg.norm(diff - diff.mean(axis=0), axis=1)
+        results["reference"] = {
+            "file": args.reference,
+            "found_fraction": round(float(ok_before.mean()), 4),
+            "position_rms_mm": round(float(np.sqrt(np.mean(residual_before**2))) * 1000, 2),
+            "position_p95_mm": round(float(np.percentile(residual_before, 95)) * 1000, 2),
+            "per_frame_decode_and_track": stats_ms(reference_costs),
+        }
+    if not args.skip_real:
+        print("real hand motion (SHREC'17 skeletons) ...", flush=True)
+        results["real_motion"] = real_motion(args, reference)
     write_results("depth_hand_bench", results, show=False)
     print("=== depth hand bench ===")
     print(f"frames                    : {args.frames} (hand found in {results['found_fraction'] * 100:.1f} %)")
@@ -164,6 +340,34 @@ def main():
         f"orientation error         : fingers mean/max {results['fingers_axis_error_deg_mean_max']} deg, "
         f"palm normal {results['palm_normal_error_deg_mean_max']} deg"
     )
+    if reference:
+        before = results["reference"]
+        print(
+            f"reference tracker         : p50 {before['per_frame_decode_and_track']['p50_ms']} ms, "
+            f"p99 {before['per_frame_decode_and_track']['p99_ms']} ms; palm RMS {before['position_rms_mm']} mm"
+        )
+    real = results.get("real_motion")
+    if isinstance(real, dict):
+        for name in ("tuning_set", "evaluation_set"):
+            part = real[name]
+            rows = [("tracker", part["tracker"]), ("nearest blob", part["nearest_blob_baseline"])]
+            if "reference" in part:
+                rows.append(("reference", part["reference"]))
+            print(f"real motion, {name} ({part['frames']} frames, subjects {part['subjects']}):")
+            for label, figures in rows:
+                cost_text = ""
+                if "per_frame_decode_and_track" in figures:
+                    c = figures["per_frame_decode_and_track"]
+                    cost_text = f"; p50 {c['p50_ms']} ms, p99 {c['p99_ms']} ms"
+                print(
+                    f"  {label:13}: found {figures['found_fraction'] * 100:.1f} %, per sequence RMS "
+                    f"{figures['per_sequence_aligned']['rms_mm']} mm, p95 {figures['per_sequence_aligned']['p95_mm']} "
+                    f"mm; one offset RMS {figures['globally_aligned']['rms_mm']} mm; raw RMS "
+                    f"{figures['raw']['rms_mm']} mm{cost_text}"
+                )
+        print(f"real-motion goals met      : {real['goals_met']}")
+    elif real:
+        print(real)
     print(f"plot                      : {png}")
     print(f"goals met                 : {results['goals_met']}")
     return 0 if results["goals_met"] else 1
