@@ -1,0 +1,263 @@
+"""Skeleton gesture benchmark: the DD-Net-style recognizer (motion_sensor.gestures.skeleton_*)
+user-independently on SHREC'17, its time per classification, and online spotting.
+
+Subjects are dealt round-robin by sorted id into 5 groups (train_skeleton_gestures); group 4
+(subjects 8, 13, 20, 27: 380 sequences) is held out. The held-out model is
+``--fold-model`` (made by ``train_skeleton_gestures --eval-folds 4 --fold-models DIR``,
+trained on the other 16 subjects only); the shipped model is trained on all 20.
+
+(a) classification of the held-out sequences by the held-out model, 14 and 28 classes,
+    against the project's DTW path recognizer (DTWClassifier, index-tip paths, templates
+    from the same 16 subjects, every ``--dtw-stride``-th test sequence) in the same run;
+    confusion matrix PNG (14 classes);
+(b) time per classification of the SHIPPED model through onnxruntime, 1 intra-op thread,
+    one sequence at a time, features included (p50/p99);
+(c) spotting on continuous streams: the held-out subjects' sequences, one stream per
+    subject, concatenated in a seeded random order with idle gaps (the hand comes to rest,
+    holds still with 1 mm tremor for 1-3 s, then moves to the next start in 0.5 s), 30 Hz,
+    run through SkeletonSpotter with the held-out model; a gesture is detected when an event
+    with its label ends inside [start, end + 1 s] of it (one event per gesture); every other
+    event is a false positive;
+(d) false positives on ordinary hand motion: every real Leap recording of
+    ../shared/data/leap_v6 converted to canonical skeletons from its finger joints (Leap
+    v6 parser) and run through the spotter with the SHIPPED model; every event counts as
+    a false positive (some recordings show a real grab or pinch: a strict count).
+
+Run: bench/run skeleton_gesture_bench [--fold-model output/skeleton_folds/fold4.onnx]
+Writes bench/results/skeleton_gesture_bench.json and skeleton_gesture_confusion.png. Needs
+../shared (says so and exits 2 without it).
+"""
+
+import argparse
+import glob
+import os
+import sys
+import time
+
+import numpy as np
+
+from bench_common import RESULTS, ROOT, write_results
+
+sys.path[:0] = [os.path.join(ROOT, "src", "motion_sensor"), os.path.join(ROOT, "src", "motion_common")]
+from motion_sensor.devices.leap_v6 import read_recording  # noqa: E402
+from motion_sensor.gestures.dtw_classifier import DTWClassifier  # noqa: E402
+from motion_sensor.gestures.skeleton_classifier import SkeletonClassifier  # noqa: E402
+from motion_sensor.gestures.skeleton_dataset import CLASSES_14, load_skeleton_dataset  # noqa: E402
+from motion_sensor.gestures.skeleton_eval import evaluate_skeleton  # noqa: E402
+from motion_sensor.gestures.skeleton_spotter import SkeletonSpotter  # noqa: E402
+from motion_sensor.gestures.skeleton_stream import build_stream  # noqa: E402
+from motion_sensor.gestures.train_skeleton_gestures import subject_folds  # noqa: E402
+
+SHARED = os.path.join(ROOT, "..", "shared", "data")
+SHREC = os.path.join(SHARED, "shrec17_train", "shrec17_train.npz")
+LEAP = os.path.join(SHARED, "leap_v6")
+HELD_OUT_FOLD = 4
+RATE = 30.0
+
+
+def log(message):
+    print(f"skeleton_gesture_bench: {message}", file=sys.stderr, flush=True)
+
+
+def stats(ms):
+    return {"p50": round(float(np.percentile(ms, 50)), 4), "p99": round(float(np.percentile(ms, 99)), 4)}
+
+
+def dtw_baseline(train, test, stride):
+    """The project's DTW path recognizer on index-tip paths (REP 103 metres -> mm)."""
+    index_tip = 9
+    classifier = DTWClassifier()
+    classifier.fit(
+        [
+            (CLASSES_14[label], seq[:, index_tip] * 1000.0, np.arange(len(seq)) * 1000.0 / RATE)
+            for seq, label in zip(train.sequences, train.label14, strict=True)
+        ]
+    )
+    right, times = 0, []
+    chosen = range(0, len(test), stride)
+    for i in chosen:
+        seq = test.sequences[i]
+        start = time.perf_counter()
+        result = classifier.classify(seq[:, index_tip] * 1000.0, np.arange(len(seq)) * 1000.0 / RATE, open_set=False)
+        times.append((time.perf_counter() - start) * 1000.0)
+        right += result.candidate == CLASSES_14[test.label14[i]]
+    return {"accuracy14": round(right / len(chosen), 4), "n_test": len(chosen), "ms": stats(times)}
+
+
+def plot_confusion(path, matrix, accuracy):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 7))
+    ax.imshow(matrix, cmap="Blues")
+    ax.set_xticks(range(14), CLASSES_14, rotation=90)
+    ax.set_yticks(range(14), CLASSES_14)
+    ax.set_xlabel("predicted")
+    ax.set_ylabel("true")
+    ax.set_title(f"skeleton gestures, held-out subjects 8/13/20/27: accuracy {accuracy:.3f}")
+    for i in range(14):
+        for j in range(14):
+            if matrix[i][j]:
+                ax.text(j, i, str(matrix[i][j]), ha="center", va="center", fontsize=7)
+    fig.tight_layout()
+    tmp = path + ".tmp.png"
+    fig.savefig(tmp, dpi=90)
+    plt.close(fig)
+    os.replace(tmp, path)
+
+
+def run_spotter(classifier, stamps, joints):
+    spotter = SkeletonSpotter(classifier)
+    events, ms = [], []
+    for stamp, frame in zip(stamps, joints, strict=True):
+        start = time.perf_counter()
+        events.extend(spotter.update(stamp, frame))
+        ms.append((time.perf_counter() - start) * 1000.0)
+    events.extend(spotter.finish())
+    return events, ms, spotter.counters
+
+
+def score_stream(events, truth):
+    matched, right_label, false_pos = set(), 0, 0
+    for event in events:
+        hit = None
+        for k, (_label, start, end) in enumerate(truth):
+            if k not in matched and start <= event.stamp <= end + 1.0:
+                hit = k
+                break
+        if hit is None:
+            false_pos += 1
+            continue
+        matched.add(hit)
+        if event.name == truth[hit][0]:
+            right_label += 1
+        else:
+            false_pos += 1
+    return len(matched), right_label, false_pos
+
+
+def spotting_bench(model, held, seed):
+    rng = np.random.default_rng(seed)
+    total = {"gestures": 0, "spotted": 0, "detected": 0, "false_positives": 0, "minutes": 0.0}
+    per_class = {c: [0, 0] for c in CLASSES_14}
+    ms_all = []
+    for subject in sorted(set(held.subject.tolist())):
+        part = held.subset(held.subject == subject)
+        stamps, joints, truth = build_stream(part.sequences, [CLASSES_14[k] for k in part.label14], rng)
+        events, ms, _ = run_spotter(model, stamps, joints)
+        ms_all.extend(ms)
+        spotted, detected, false_pos = score_stream(events, truth)
+        for label, start, end in truth:
+            per_class[label][0] += 1
+            per_class[label][1] += any(
+                e.name == label and start <= e.stamp <= end + 1.0 for e in events
+            )  # approximate per-class view
+        total["gestures"] += len(truth)
+        total["spotted"] += spotted
+        total["detected"] += detected
+        total["false_positives"] += false_pos
+        total["minutes"] += stamps[-1] / 60.0
+        log(f"stream of subject {subject}: {len(truth)} gestures, {detected} detected, {false_pos} false positives")
+    return {
+        "streams": len(set(held.subject.tolist())),
+        "gestures": total["gestures"],
+        "minutes": round(total["minutes"], 2),
+        "detection_rate": round(total["detected"] / total["gestures"], 4),
+        "spotted_any_label": round(total["spotted"] / total["gestures"], 4),
+        "false_positives": total["false_positives"],
+        "false_positives_per_min": round(total["false_positives"] / total["minutes"], 3),
+        "per_class_detection": {c: round(v[1] / v[0], 3) for c, v in per_class.items() if v[0]},
+        "ms_per_frame": stats(ms_all),
+    }
+
+
+def leap_bench(model):
+    files = sorted(glob.glob(os.path.join(LEAP, "*.jsonl.gz")))
+    per_file, total_events, total_minutes = {}, 0, 0.0
+    for path in files:
+        recording = read_recording(path)
+        spotter = SkeletonSpotter(model)
+        events, seconds, last = [], 0.0, None
+        for frame in recording.frames:
+            hands = [h for h in frame.hands if h.skeleton is not None]
+            if not hands:
+                continue
+            if last is not None:
+                seconds += min(frame.timestamp - last, 0.3)
+            last = frame.timestamp
+            events.extend(spotter.update(frame.timestamp, hands[0].skeleton))
+        events.extend(spotter.finish())
+        name = os.path.basename(path).replace(".jsonl.gz", "")
+        per_file[name] = {"seconds": round(seconds, 2), "events": [f"{e.name}:{e.confidence:.2f}" for e in events]}
+        total_events += len(events)
+        total_minutes += seconds / 60.0
+    return {
+        "recordings": len(files),
+        "minutes_with_a_hand": round(total_minutes, 2),
+        "false_positives": total_events,
+        "false_positives_per_10_min": round(10.0 * total_events / max(total_minutes, 1e-9), 3),
+        "per_recording": per_file,
+    }
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--fold-model", default=os.path.join(ROOT, "output", "skeleton_folds", "fold4.onnx"))
+    parser.add_argument("--dtw-stride", type=int, default=4, help="every N-th held-out sequence for the DTW baseline")
+    parser.add_argument("--seed", type=int, default=29)
+    args = parser.parse_args()
+    if not os.path.isfile(SHREC) or not os.path.isdir(LEAP):
+        log(f"needs {SHREC} and {LEAP} (the shared data); nothing measured")
+        return 2
+    if not os.path.isfile(args.fold_model):
+        log(
+            f"no held-out model {args.fold_model}: make it with train_skeleton_gestures --data {SHREC} "
+            f"--eval-folds {HELD_OUT_FOLD} --fold-models {os.path.dirname(args.fold_model)}"
+        )
+        return 2
+    data = load_skeleton_dataset(SHREC)
+    groups = subject_folds(data.subject, 5)
+    test_mask = np.array([groups[int(s)] == HELD_OUT_FOLD for s in data.subject])
+    held, train = data.subset(test_mask), data.subset(~test_mask)
+    fold_model = SkeletonClassifier(args.fold_model)
+    shipped = SkeletonClassifier()
+    log(f"(a) held-out subjects {sorted(set(held.subject.tolist()))}: {len(held)} sequences")
+    a14 = evaluate_skeleton(fold_model, held, 14)
+    a28 = evaluate_skeleton(fold_model, held, 28)
+    log("(a) DTW path baseline")
+    baseline = dtw_baseline(train, held, args.dtw_stride)
+    plot_path = os.path.join(RESULTS, "skeleton_gesture_confusion.png")
+    plot_confusion(plot_path, a14["confusion"], a14["accuracy"])
+    log("(b) shipped model timing")
+    timing = evaluate_skeleton(shipped, held, 14)
+    log("(c) spotting on continuous held-out streams")
+    spotting = spotting_bench(fold_model, held, args.seed)
+    log("(d) false positives on the Leap recordings")
+    leap = leap_bench(shipped)
+    results = {
+        "held_out_subjects": sorted(int(s) for s in set(held.subject.tolist())),
+        "classification": {
+            "accuracy14": a14["accuracy"],
+            "accuracy28": a28["accuracy"],
+            "n_test": a14["n_test"],
+            "dtw_baseline_index_tip": baseline,
+            "accuracy14_ratio_to_dtw": round(a14["accuracy"] / max(baseline["accuracy14"], 1e-9), 3),
+            "confusion_png": os.path.relpath(plot_path, ROOT),
+        },
+        "timing_shipped_model_ms": {
+            "p50": timing["ms_per_classification_p50"],
+            "p99": timing["ms_per_classification_p99"],
+            "dtw_baseline_p50_ratio": round(baseline["ms"]["p50"] / timing["ms_per_classification_p50"], 2),
+            "model_bytes": os.path.getsize(shipped.model_path),
+        },
+        "spotting_held_out_streams": spotting,
+        "leap_teleop_false_positives": leap,
+    }
+    write_results("skeleton_gesture_bench", results)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
