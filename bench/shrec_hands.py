@@ -16,8 +16,13 @@ tracker's working volume as for a Kinect-like camera.
 """
 
 import os
+import sys
 
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src", "motion_sensor"))
+
+from motion_sensor.testing.skeleton_depth import place_in_view  # noqa: E402
 
 __all__ = ["SHREC", "Sequence", "load", "select", "place"]
 
@@ -89,6 +94,4 @@ def select(data, seed: int, per_subject: int) -> tuple[list[Sequence], list[Sequ
 def place(joints: np.ndarray, depth_shift_m: float = 0.30) -> np.ndarray:
     """The sequence's joints moved so that their mean palm centre is on the optical axis,
     ``depth_shift_m`` further away (see the module)."""
-    joints = np.asarray(joints, dtype=float)
-    palm = joints[:, 1].mean(axis=0)
-    return joints + np.array([-palm[0], -palm[1], depth_shift_m])
+    return place_in_view(joints, depth_shift_m)

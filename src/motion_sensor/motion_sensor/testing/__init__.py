@@ -3,7 +3,8 @@ imports them, as ``hw_interface.testing``).
 
 Its modules:
 
-- ``synthetic_depth``: a synthetic hand rendered as depth images.
+- ``synthetic_depth``: a synthetic hand rendered as depth images;
+- ``skeleton_depth``: a real hand rendered as depth images from its tracked skeleton.
 """
 
 from motion_common.lazy_exports import lazy_exports
@@ -13,6 +14,10 @@ _PUBLIC = {
     "HandPose": "synthetic_depth",
     "render_hand": "synthetic_depth",
     "hand_path": "synthetic_depth",
+    "HandModel": "skeleton_depth",
+    "SensorNoise": "skeleton_depth",
+    "render_skeleton": "skeleton_depth",
+    "place_in_view": "skeleton_depth",
 }
 __all__ = list(_PUBLIC)
 

@@ -51,6 +51,7 @@ __all__ = [
     "SensorNoise",
     "hand_primitives",
     "render_skeleton",
+    "place_in_view",
 ]
 
 WRIST, PALM = 0, 1
@@ -124,6 +125,14 @@ def hand_primitives(joints: np.ndarray, model: HandModel = HandModel()):
     capsules.append((j[WRIST], elbow_side, model.wrist_radius))
     capsules.append((elbow_side, elbow_side + back * model.forearm_length, model.forearm_radius))
     return capsules, prisms
+
+
+def place_in_view(joints: np.ndarray, depth_m: float) -> np.ndarray:
+    """A skeleton sequence ((n, 22, 3), optical) moved rigidly, a translation only, so that
+    its mean palm centre lies on the optical axis; its depth moves by ``depth_m``."""
+    joints = np.asarray(joints, dtype=float)
+    palm = joints[:, PALM].mean(axis=0)
+    return joints + np.array([-palm[0], -palm[1], depth_m])
 
 
 def _forearm_direction(back, min_away):
