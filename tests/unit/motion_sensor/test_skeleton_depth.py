@@ -12,7 +12,6 @@ from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY, DepthHandTracker
 from motion_sensor.testing.skeleton_depth import (
     PALM,
     HandModel,
-    SensorNoise,
     hand_primitives,
     place_in_view,
     render_skeleton,
