@@ -67,8 +67,8 @@ SCENE_CAMERA = NodeInterface(
             Param("rate", 15.0, "Hz", "images per second (at most what the renderer manages)", low=0.1, high=60.0),
             Param("width", 320, "px", "image width", low=16, high=1920),
             Param("height", 240, "px", "image height", low=16, high=1080),
-            Param("eye", [0.5, -0.9, 0.75], "m", "camera position, base frame"),
-            Param("target", [-0.4, -0.1, 0.2], "m", "point the camera looks at, base frame"),
+            Param("eye", [0.15, -0.75, 0.65], "m", "camera position, base frame"),
+            Param("target", [-0.45, -0.05, 0.2], "m", "point the camera looks at, base frame"),
             Param("fov_deg", 55.0, "deg", "vertical field of view", low=1.0, high=170.0),
             Param("frame_id", "scene_camera", doc="header.frame_id of the images"),
         ]

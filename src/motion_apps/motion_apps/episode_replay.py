@@ -3,11 +3,13 @@ how closely the tool retraces the recorded path (plain Python; the client and th
 injected, so it is tested without ROS).
 
 The arm first moves (MOVE_J) to the episode's first recorded joints and gripper state; then
-each frame's joint targets are streamed with SET_JOINTS at the episode's rate, through the
-server's own checks (step, lag, workspace, latched stop: the same as teleop's stream), and
-the gripper is set where the action changes it. Just before frame ``i``'s targets are sent,
-the measured tool is compared with the tool recorded at frame ``i``: both have followed the
-same targets up to ``i - 1``.
+the joint targets are streamed with SET_JOINTS through the server's own checks (step, lag,
+workspace, latched stop: the same as teleop's stream), and the gripper is set where the
+action changes it. Frame ``i``'s targets go out at ``i / fps``; between two frames the
+targets move linearly from one frame's to the next at ``stream_rate`` (the core commanded at
+the hand's rate, ~110 Hz, and a servo following 10 Hz steps would trail by most of a step).
+Just before frame ``i``'s targets are sent, the measured tool is compared with the tool
+recorded at frame ``i``: both have followed the same targets up to then.
 """
 
 import time
@@ -41,9 +43,18 @@ class ReplayReport:
 class EpisodeReplay:
     """One replay; ``client`` has move_j, set_joints, set_gripper and get_pose."""
 
-    def __init__(self, client, fps: float, clock=time.monotonic, sleep=time.sleep, settle_s: float = 0.5):
+    def __init__(
+        self,
+        client,
+        fps: float,
+        stream_rate: float = 100.0,
+        clock=time.monotonic,
+        sleep=time.sleep,
+        settle_s: float = 0.5,
+    ):
         self.client = client
         self.period = 1.0 / fps
+        self.substeps = max(1, int(round(stream_rate / fps)))
         self.clock = clock
         self.sleep = sleep
         self.settle_s = settle_s
@@ -63,20 +74,29 @@ class EpisodeReplay:
         self.sleep(self.settle_s)
         start = self.clock()
         for i, action in enumerate(actions):
-            wait = start + i * self.period - self.clock()
-            if wait > 0:
-                self.sleep(wait)
+            self._wait_until(start + i * self.period)
             if i > 0:
                 position, _ = self.client.get_pose()
                 report.tool_error_mm.append(1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
-            try:
-                self.client.set_joints([float(v) for v in action[:dof]])
-            except Exception as exc:  # noqa: BLE001 - the server's refusal ends the replay, reported
-                report.refused += 1
-                report.reason = f"frame {i}: {exc}"
-                return report
-            closed = bool(action[dof] > 0.5)
-            if closed != gripper:
-                self.client.set_gripper(closed)
-                gripper = closed
+            following = actions[i + 1, :dof] if i + 1 < len(actions) else action[:dof]
+            for k in range(self.substeps if i + 1 < len(actions) else 1):
+                if k:
+                    self._wait_until(start + (i + k / self.substeps) * self.period)
+                target = action[:dof] + (following - action[:dof]) * (k / self.substeps)
+                try:
+                    self.client.set_joints([float(v) for v in target])
+                except Exception as exc:  # noqa: BLE001 - the server's refusal ends the replay, reported
+                    report.refused += 1
+                    report.reason = f"frame {i}: {exc}"
+                    return report
+                if k == 0:
+                    closed = bool(action[dof] > 0.5)
+                    if closed != gripper:
+                        self.client.set_gripper(closed)
+                        gripper = closed
         return report
+
+    def _wait_until(self, moment: float) -> None:
+        wait = moment - self.clock()
+        if wait > 0:
+            self.sleep(wait)

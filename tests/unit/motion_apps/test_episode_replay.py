@@ -48,7 +48,9 @@ def _episode(n=20):
 
 def _replay(arm):
     now = [0.0]
-    return EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=lambda s: now.__setitem__(0, now[0] + s))
+    return EpisodeReplay(
+        arm, 10.0, stream_rate=10.0, clock=lambda: now[0], sleep=lambda s: now.__setitem__(0, now[0] + s)
+    )
 
 
 def test_replay_retraces_the_recorded_tool_and_sets_the_gripper_where_it_changed():
@@ -60,6 +62,22 @@ def test_replay_retraces_the_recorded_tool_and_sets_the_gripper_where_it_changed
     summary = report.summary()
     assert summary["frames"] == 20 and summary["compared"] == 19 and summary["refused"] == 0
     assert summary["tool_error_mm_max"] == pytest.approx(0.0, abs=1e-3)
+
+
+def test_replay_streams_targets_between_frames():
+    states, actions, tools = _episode(4)
+    arm = _Arm()
+    sent = []
+    arm.set_joints = lambda joints: sent.append(joints[0])
+    now = [0.0]
+    replay = EpisodeReplay(
+        arm, 10.0, stream_rate=40.0, clock=lambda: now[0], sleep=lambda s: now.__setitem__(0, now[0] + s)
+    )
+    replay.run(states, actions, tools)
+    # 4 targets per frame interval (40 Hz over 10 Hz frames), linear between the frames' targets
+    step = float(actions[1, 0] - actions[0, 0])
+    assert len(sent) == 3 * 4 + 1
+    assert sent[:5] == pytest.approx([actions[0, 0] + step * k / 4 for k in range(5)], abs=1e-6)
 
 
 def test_replay_reports_a_refusal_and_stops():
