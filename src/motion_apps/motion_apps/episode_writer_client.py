@@ -21,6 +21,7 @@ __all__ = ["WriterError", "EpisodeWriterClient", "LEROBOT_PYTHON", "WRITER_SCRIP
 _PROJECT = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", ".."))
 LEROBOT_PYTHON = os.path.join(_PROJECT, ".venv-lerobot", "bin", "python")
 WRITER_SCRIPT = os.path.join(os.path.dirname(os.path.realpath(__file__)), "lerobot_writer.py")
+WRITER_NICENESS = 10
 
 
 class WriterError(RuntimeError):
@@ -49,6 +50,8 @@ class EpisodeWriterClient:
             stderr=subprocess.PIPE,
             env=child_env,
             text=False,
+            # Encoding and disk writes yield the CPU to the control path (a 2-core robot PC).
+            preexec_fn=lambda: os.nice(WRITER_NICENESS),
         )
         self.timeout_s = timeout_s
         self.dropped = 0

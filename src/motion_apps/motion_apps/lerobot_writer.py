@@ -24,6 +24,7 @@ disk writes never run in the recorder's (nor the control path's) interpreter.
 
 import json
 import os
+import signal
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -167,6 +168,10 @@ class Writer:
 
 
 def main(stdin=None, stdout=None) -> int:
+    # Ctrl-C (roslaunch's SIGINT to the recorder's process group) reaches this process too:
+    # the recorder saves the episode in progress at its shutdown and then ends this process
+    # by closing its stdin, so SIGINT must not kill it first.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     stdin = stdin or sys.stdin.buffer
     stdout = stdout or sys.stdout
     writer = Writer()
