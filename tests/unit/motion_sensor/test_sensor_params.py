@@ -53,7 +53,7 @@ def test_shipped_sequencer_yaml_builds_every_filter():
         config, inputs = sequencer_setup({**params, "filter": name}, "sequencer.yaml")
         Sequencer(config)
         assert inputs == [{"topic": "~input", "device": "default", "priority": 0}]
-    config, _ = sequencer_setup({**params, "queue_size": 4}, "x")
+    config, _ = sequencer_setup({**params, "filter": "mean", "queue_size": 4}, "x")
     assert config.filter_params == {"queue_size": 4}
 
 
