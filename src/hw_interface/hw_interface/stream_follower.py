@@ -14,27 +14,13 @@ stale target after a restart, a burst) can then never make the arm lurch. Moving
 fixed goal passes it by at most the last steps' rounding (< 0.1 mrad); a goal that moves
 back under a fast setpoint is passed and come back to, within the limits, as a real servo
 would.
-
-The setpoint leads by the goal's own motion: each new goal's velocity (from the previous
-goal and the time between them) moves the goal on until the next one is due, and the
-braking counts where that motion would stop. So a steadily moving stream is followed
-without falling a command period behind and without braking before every goal as if it were
-the last. The lead is bounded: at most one command interval (itself at most
-``MAX_LEAD_S``) past the latest goal, held while the next goal is late, and gone when a goal
-repeats the previous one (the target stopped), when none has come for two intervals (the
-stream paused or ended: the setpoint settles on the last goal), and after brake() or
-reset().
 """
 
 import numpy as np
 
 from motion_common.params import Param
 
-__all__ = ["StreamFollower", "STREAM_ACCELERATION_PARAM", "MAX_LEAD_S"]
-
-#: s: the longest the goal is moved on by its own velocity past the latest goal (a stream
-#: slower than 20 Hz gets no lead at all).
-MAX_LEAD_S = 0.05
+__all__ = ["StreamFollower", "STREAM_ACCELERATION_PARAM"]
 
 #: The drivers' parameter of the follower's acceleration limit (one declaration for both).
 STREAM_ACCELERATION_PARAM = Param(
@@ -71,77 +57,34 @@ class StreamFollower:
         self.setpoint = np.array(start, dtype=float)
         self.goal = self.setpoint.copy()
         self.velocity = np.zeros_like(self.setpoint)
-        self._clock = 0.0  # s, advanced by step()
-        self._clear_lead()
-
-    def _clear_lead(self) -> None:
-        self._goal_object = None  # the latest goal object given (passed again: no new goal)
-        self._goal_source = None  # the latest goal's values
-        self._goal_time = None  # the clock when the latest goal came
-        self.goal_velocity = np.zeros_like(self.setpoint)  # rad/s, the lead's velocity
-        self._lead_interval = 0.0  # s, how long the lead lasts after a goal
 
     def reset(self, position) -> None:
         """Hold ``position`` (after a stop, a MoveJ/MoveL or a reset): goal and setpoint, at rest."""
         self.setpoint = np.array(position, dtype=float)
         self.goal = self.setpoint.copy()
         self.velocity = np.zeros_like(self.setpoint)
-        self._clear_lead()
 
     def set_goal(self, goal) -> None:
-        """The latest streamed target. Drivers that servo at a fixed rate pass the latest
-        one every period: the same object again is not a new goal. A new goal equal to the
-        previous one is: the target stopped, and the lead is gone."""
-        if goal is self._goal_object:
-            return
-        self._goal_object = goal
-        goal = np.array(goal, dtype=float)
-        interval = None if self._goal_time is None else self._clock - self._goal_time
-        if interval is not None and 0.0 < interval <= MAX_LEAD_S and self._goal_source is not None:
-            velocity = (goal - self._goal_source) / interval
-            # Within the speed limits, one scale for all joints (the path stays straight).
-            ratio = float(np.max(np.abs(velocity) / self.velocity_limits))
-            self.goal_velocity = velocity / ratio if ratio > 1.0 else velocity
-            self._lead_interval = interval
-        else:
-            self.goal_velocity = np.zeros_like(self.setpoint)
-            self._lead_interval = 0.0
-        self._goal_source = goal
-        self._goal_time = self._clock
-        self.goal = goal.copy()
+        """The latest streamed target."""
+        self.goal = np.array(goal, dtype=float)
 
     def brake(self) -> None:
         """The stream stopped: come to rest as soon as the acceleration limit allows (at
         once without one), where braking from the present velocity ends."""
-        self._clear_lead()
         if self.acceleration is None:
             self.goal = self.setpoint.copy()
             self.velocity[:] = 0.0
             return
         self.goal = self.setpoint + self.velocity * np.abs(self.velocity) / (2.0 * self.acceleration)
 
-    def _lead(self) -> tuple:
-        """(goal moved on by its velocity until the next goal is due, that velocity now)."""
-        if self._goal_time is None or self._lead_interval <= 0.0:
-            return self.goal, None
-        age = self._clock - self._goal_time
-        if age < self._lead_interval:
-            return self.goal + self.goal_velocity * age, self.goal_velocity
-        if age < 2.0 * self._lead_interval:  # the next goal is late: hold where it was due
-            return self.goal + self.goal_velocity * self._lead_interval, None
-        return self.goal, None  # no next goal: the stream paused or ended on this one
-
     def step(self, dt: float) -> np.ndarray:
         """Advance the setpoint by one step of ``dt`` seconds; return it."""
-        if dt > 0:
-            self._clock += dt
-        goal, goal_velocity = self._lead()
-        error = goal - self.setpoint
+        error = self.goal - self.setpoint
         if self.acceleration is None:
             reach = self.velocity_limits * dt
             ratio = float(np.max(np.abs(error) / reach)) if dt > 0 else float("inf")
             if ratio <= 1.0:
-                self.setpoint = goal.copy()
+                self.setpoint = self.goal.copy()
             elif np.isfinite(ratio):
                 self.setpoint = self.setpoint + error / ratio
             return self.setpoint
@@ -154,14 +97,7 @@ class StreamFollower:
         # a * dt of braking still stop within the distance left, so the last step needs no
         # harder braking than the others.)
         a_dt = self.acceleration * dt
-        # Where the goal would stop braking as hard as the setpoint may counts as room (none
-        # once it is coming back), so a moving goal is kept pace with, not braked for.
-        room = np.abs(error)
-        if goal_velocity is not None:
-            room = np.maximum(
-                room + np.sign(error) * goal_velocity * np.abs(goal_velocity) / (2.0 * self.acceleration), 0.0
-            )
-        brake = a_dt * (np.sqrt(0.25 + 2.0 * room / (a_dt * dt)) - 0.5)
+        brake = a_dt * (np.sqrt(0.25 + 2.0 * np.abs(error) / (a_dt * dt)) - 0.5)
         cap = np.minimum(self.velocity_limits, brake)
         moving = np.abs(desired) > 0.0
         if np.any(moving):
@@ -182,9 +118,9 @@ class StreamFollower:
         # comes back within the limit, as a real servo would.
         landing_speed = error / dt
         gentle = (np.abs(previous - landing_speed) <= a_dt * (1 + 1e-9)) & (np.abs(landing_speed) <= a_dt * (1 + 1e-9))
-        landing = gentle & (np.sign(goal - new) * np.sign(error) <= 0)
+        landing = gentle & (np.sign(self.goal - new) * np.sign(error) <= 0)
         if np.any(landing):
-            new[landing] = goal[landing]
+            new[landing] = self.goal[landing]
             # The speed of the landing step: the next step brakes from it to rest.
             self.velocity[landing] = landing_speed[landing]
         self.setpoint = new
@@ -193,7 +129,7 @@ class StreamFollower:
     @property
     def at_rest(self) -> bool:
         """True when the setpoint has stopped at its goal."""
-        return bool(np.all(self.velocity == 0.0) and np.array_equal(self.setpoint, self._lead()[0]))
+        return bool(np.all(self.velocity == 0.0) and np.array_equal(self.setpoint, self.goal))
 
     def __repr__(self):  # pragma: no cover - debugging aid
         speed = float(np.max(np.abs(self.velocity))) if self.velocity.size else 0.0
