@@ -372,7 +372,7 @@ class DashboardPage:
             with ui.row():
                 for key, text, word in (
                     ("episode_start", "Start", "start"),
-                    ("episode_stop", "Stop and save", "stop"),
+                    ("episode_stop", "Save", "stop"),  # "STOP" is the e-stop's label alone
                     ("episode_discard", "Discard", "discard"),
                     ("episode_success", "Success", "success"),
                     ("episode_failure", "Failure", "failure"),
