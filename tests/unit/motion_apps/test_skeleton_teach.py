@@ -1,5 +1,5 @@
 """Teaching on hand-skeleton gestures: a stream of real SHREC'17 sequences
-(tests/data/shrec17_slice.npz: tap, grab, expand, swipe left, shake of subject 10, with
+(tests/data/shrec17_slice.npz: tap, grab, expand, swipe left, shake of subject 2, with
 idle gaps) through the skeleton spotter and the shipped model, each gesture mapped by
 config/skeleton_gesture_commands.yaml to a teach command of a TeachSession."""
 
@@ -36,7 +36,7 @@ def test_teach_session_runs_on_skeleton_gestures(tmp_path):
     picked = []
     for name in ORDER:
         picked.append(
-            next(i for i in range(len(data)) if data.subject[i] == 10 and CLASSES_14[data.label14[i]] == name)
+            next(i for i in range(len(data)) if data.subject[i] == 2 and CLASSES_14[data.label14[i]] == name)
         )
     stamps, joints, truth = build_stream(
         [data.sequences[i] for i in picked], list(ORDER), np.random.default_rng(5), order=range(len(picked))

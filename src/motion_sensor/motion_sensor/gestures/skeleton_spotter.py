@@ -1,50 +1,54 @@
 """Online spotting of skeleton gestures in a live stream of one hand's canonical skeletons.
 
 ``SkeletonSpotter.update(stamp, joints)`` takes one frame (``joints`` (22, 3), metres,
-REP 103) and returns the gestures it completes, each a ``GestureEvent`` whose ``info``
-has ``start``, ``end`` (stamps, s), the 28-class label and the motion extent.
+REP 103) and returns the gestures it completes, each a ``GestureEvent`` (stamp = the
+gesture's end) whose ``info`` has ``start``, ``end`` (stamps, s), the 28-class label and
+the motion extent.
 
-Every ``hop_s`` the frames of the last ``max(window_s)`` seconds are cut into windows
-ending now, one per length in ``window_s``; each is resampled in time to the network's
-frame count and classified (one onnxruntime run for all of them). A window is a
-candidate when
+A gesture is motion between two rests, as the SHREC online tracks' streams and an
+operator's deliberate commands are. The hand is at rest while the motion extent of the
+last ``rest_window_s`` (the largest RMS excursion of a joint about its mean place: fingers
+relative to the palm, the palm itself; metres, independent of the frame rate) is under
+``rest_extent_m``. A segment starts when the hand leaves a rest of at least ``pause_s``
+(a command starts from rest: the hand that moves on from teleop motion starts none) and
+ends once it has rested ``pause_s`` again. It is classified (the shipped network through ``classifier``; the whole
+segment and the segment without its first quarter, the hand's way into the gesture: the
+more confident wins) when
 
-- its motion extent (the largest RMS excursion of a joint about its mean place in the
-  window: fingers relative to the palm, the palm itself as it is; metres, independent of
-  the frame rate and of tremor-sized noise) is at least ``min_extent_m`` (an idle or
-  still hand is no gesture; whole SHREC'17 gestures measure 2.3 cm and more), and
-- the best gesture's probability is at least ``min_confidence`` and its label is one
-  of ``labels`` (all 14 when empty).
+- it lasted ``min_duration_s`` to ``max_duration_s`` (longer motion is not a command: the
+  spotter then waits for the next rest),
+- its motion extent is at least ``min_extent_m`` (whole SHREC'17 gestures measure 2.3 cm
+  and more), and
+- the best gesture's probability is at least ``min_confidence`` and its label is one of
+  ``labels`` (all 14 when empty).
 
-Non-maximum suppression: overlapping candidates compete and the most confident wins;
-the winner is emitted once no overlapping candidate has beaten it for ``settle_s``.
-After an emitted gesture nothing starting before its end + ``refractory_s`` is taken.
-A gap longer than ``max_gap_s`` (hand lost) clears the history. Memory is bounded: the
-frame history is a deque of at most ``max(window_s)`` seconds at ``max_rate_hz``.
+After a gesture, a segment that starts before its end + ``refractory_s`` is ignored. A
+frame gap longer than ``max_gap_s`` (hand lost) drops the segment. Memory is bounded: the
+history is a deque of at most ``max_duration_s`` plus the rest windows at ``max_rate_hz``.
 """
 
 from collections import deque
-from dataclasses import dataclass
 
 import numpy as np
 
 from motion_common.params import Param, ParamSchema
 from motion_sensor.gestures.gesture_frame import GestureEvent
 from motion_sensor.gestures.skeleton_dataset import CLASSES_14
-from motion_sensor.gestures.skeleton_features import FRAMES
 from motion_sensor.skeleton_joints import N_JOINTS
 
 __all__ = ["SKELETON_SPOTTER_PARAMS", "SkeletonSpotter", "motion_extent"]
 
 SKELETON_SPOTTER_PARAMS = ParamSchema(
     [
-        Param("window_s", [1.0, 1.5, 2.0, 2.5], "s", "window lengths tried at each hop", item_kind=float),
-        Param("hop_s", 0.2, "s", "time between two evaluations", low=0.01),
-        Param("min_extent_m", 0.015, "m", "windows whose motion extent is smaller are idle", low=0.0),
-        Param("min_confidence", 0.85, "", "a candidate's best gesture probability", low=0.0, high=1.0),
-        Param("settle_s", 0.4, "s", "a candidate unbeaten this long is emitted", low=0.0),
-        Param("refractory_s", 0.5, "s", "after a gesture, no new one starts before its end plus this", low=0.0),
-        Param("max_gap_s", 0.3, "s", "a longer frame gap clears the history", low=0.0, low_open=True),
+        Param("rest_window_s", 0.3, "s", "window of the rest test", low=0.05),
+        Param("rest_extent_m", 0.006, "m", "motion extent under which the hand rests", low=0.0, low_open=True),
+        Param("pause_s", 0.3, "s", "rest that ends a segment", low=0.0),
+        Param("min_duration_s", 0.4, "s", "shorter segments are ignored", low=0.0),
+        Param("max_duration_s", 6.0, "s", "longer motion is not a gesture", low=0.0, low_open=True),
+        Param("min_extent_m", 0.015, "m", "segments whose motion extent is smaller are ignored", low=0.0),
+        Param("min_confidence", 0.85, "", "a segment's best gesture probability", low=0.0, high=1.0),
+        Param("refractory_s", 0.3, "s", "after a gesture, no new one starts before its end plus this", low=0.0),
+        Param("max_gap_s", 0.3, "s", "a longer frame gap drops the segment", low=0.0, low_open=True),
         Param("max_rate_hz", 200.0, "Hz", "bounds the frame history", low=1.0),
         Param("labels", [], "", "gestures that may fire (empty: all 14)", item_kind=str),
     ]
@@ -63,19 +67,9 @@ def motion_extent(joints):
     return float(spread.max())
 
 
-@dataclass
-class _Candidate:
-    label: str
-    label28: str
-    confidence: float
-    start: float
-    end: float
-    energy: float
-    seen: float  # when it became the best candidate
-
-
 class SkeletonSpotter:
-    """Sliding-window spotting with a ``SkeletonClassifier`` (see the module doc)."""
+    """Rest-bounded segmentation and classification with a ``SkeletonClassifier``
+    (``classify_batch``); see the module doc."""
 
     def __init__(self, classifier, params=None):
         self.classifier = classifier
@@ -83,33 +77,38 @@ class SkeletonSpotter:
         unknown = sorted(set(self.params["labels"]) - set(CLASSES_14))
         if unknown:
             raise ValueError(f"skeleton spotter: unknown labels {unknown} (known: {', '.join(CLASSES_14)})")
-        self.windows = sorted(float(w) for w in self.params["window_s"])
         self.allowed = set(self.params["labels"]) or set(CLASSES_14)
-        longest = self.windows[-1]
-        self._frames = deque(maxlen=int(longest * self.params["max_rate_hz"]) + 2)
-        self._next_eval = None
-        self._pending = None
+        p = self.params
+        span = p["max_duration_s"] + p["pause_s"] + 2.0 * p["rest_window_s"]
+        self._frames = deque(maxlen=int(span * p["max_rate_hz"]) + 2)
+        self._start = None  # stamp where the current segment started
+        self._rest_since = None  # stamp where the hand came to rest within a segment
+        self._wait_for_rest = False  # after overlong motion
+        self._calm_since = None  # stamp since which the hand rests outside a segment
         self._blocked_until = -np.inf
-        self.counters = {
-            "frames": 0,
-            "evaluations": 0,
-            "idle": 0,
-            "candidates": 0,
-            "gestures": 0,
-            "gaps": 0,
-            "out_of_order": 0,
-        }
+        self.counters = dict.fromkeys(
+            ("frames", "segments", "short", "long", "small", "unsure", "gestures", "gaps", "out_of_order"), 0
+        )
 
     def reset(self):
         """Forget the history (the hand left)."""
         self._frames.clear()
-        self._next_eval = None
-        self._pending = None
+        self._start = None
+        self._rest_since = None
+        self._wait_for_rest = False
+        self._calm_since = None
+
+    def finish(self):
+        """The gesture of a segment still open at the end of a stream, if any."""
+        if self._start is None or not self._frames:
+            return []
+        end = self._frames[-1][0]
+        self._start, start = None, self._start
+        return self._decide(start, end)
 
     def update(self, stamp, joints):
         """Take one frame; return the list of gestures completed now (usually empty)."""
         stamp = float(stamp)
-        events = []
         if self._frames:
             last = self._frames[-1][0]
             if stamp <= last:
@@ -117,83 +116,75 @@ class SkeletonSpotter:
                 return []
             if stamp - last > self.params["max_gap_s"]:
                 self.counters["gaps"] += 1
-                events = self._flush(stamp, force=True)
                 self.reset()
         self._frames.append((stamp, np.asarray(joints, dtype=np.float64).reshape(N_JOINTS, 3)))
         self.counters["frames"] += 1
-        if self._next_eval is None:
-            self._next_eval = stamp + self.windows[0]
-        if stamp >= self._next_eval:
-            self._next_eval = stamp + self.params["hop_s"]
-            self._evaluate(stamp)
-        return events + self._flush(stamp)
-
-    def finish(self):
-        """The gesture still pending at the end of a stream, if any."""
-        return self._flush(np.inf, force=True)
-
-    def _windows(self, now):
-        stamps = np.fromiter((f[0] for f in self._frames), dtype=float, count=len(self._frames))
-        cut = []
-        for length in self.windows:
-            start = now - length
-            if stamps[0] > start + 0.05 * length or start < self._blocked_until:
-                continue
-            first = int(np.searchsorted(stamps, start))
-            if len(stamps) - first < 4:
-                continue
-            cut.append((start, first))
-        return stamps, cut
-
-    def _evaluate(self, now):
-        self.counters["evaluations"] += 1
-        stamps, cut = self._windows(now)
-        if not cut:
-            return
-        joints = np.stack([f[1] for f in self._frames])
-        sequences, spans, energies = [], [], []
-        for _start, first in cut:
-            times = np.linspace(stamps[first], now, FRAMES)
-            window = joints[first:]
-            energy = motion_extent(window)
-            if energy < self.params["min_extent_m"]:
-                self.counters["idle"] += 1
-                continue
-            positions = np.interp(times, stamps[first:], np.arange(len(window), dtype=float))
-            low = np.minimum(np.floor(positions).astype(int), len(window) - 2)
-            frac = (positions - low)[:, None, None]
-            sequences.append(window[low] * (1.0 - frac) + window[low + 1] * frac)
-            spans.append((stamps[first], now))
-            energies.append(energy)
-        if not sequences:
-            return
-        results = self.classifier.classify_batch(sequences)
-        best = None
-        for result, span, energy in zip(results, spans, energies, strict=True):
-            if result.label14 not in self.allowed or result.confidence < self.params["min_confidence"]:
-                continue
-            if best is None or result.confidence > best.confidence:
-                best = _Candidate(result.label14, result.label28, result.confidence, *span, energy, now)
-        if best is None:
-            return
-        self.counters["candidates"] += 1
-        pending = self._pending
-        if pending is None or best.start >= pending.end or best.confidence > pending.confidence:
-            if pending is not None and best.start >= pending.end:
-                return  # a later, separate candidate waits until the pending one is out
-            self._pending = best
-
-    def _flush(self, now, force=False):
-        pending = self._pending
-        if pending is None or (not force and now - pending.seen < self.params["settle_s"]):
+        p = self.params
+        if stamp - self._frames[0][0] < p["rest_window_s"]:
             return []
-        self._pending = None
-        self._blocked_until = pending.end + self.params["refractory_s"]
+        resting = motion_extent(self._recent(stamp - p["rest_window_s"])) < p["rest_extent_m"]
+        if self._start is None:
+            if resting:
+                self._wait_for_rest = False
+                self._calm_since = stamp if self._calm_since is None else self._calm_since
+            elif self._calm_since is not None and stamp - self._calm_since >= p["pause_s"]:
+                self._start = stamp - p["rest_window_s"]  # a command starts from rest
+                self._rest_since = self._calm_since = None
+            else:
+                self._calm_since = None
+            return []
+        if not resting:
+            self._rest_since = None
+            if stamp - self._start > p["max_duration_s"] + p["rest_window_s"]:
+                self.counters["long"] += 1
+                self._start, self._wait_for_rest = None, True
+            return []
+        if self._rest_since is None:
+            self._rest_since = stamp
+        if stamp - self._rest_since < p["pause_s"]:
+            return []
+        start, end = self._start, self._rest_since - 0.5 * p["rest_window_s"]
+        self._calm_since = self._rest_since  # already resting: the next command may follow
+        self._start = self._rest_since = None
+        return self._decide(start, end)
+
+    def _recent(self, since):
+        return np.stack([f[1] for f in self._frames if f[0] >= since])
+
+    def _segment(self, start, end):
+        stamps = np.fromiter((f[0] for f in self._frames), dtype=float, count=len(self._frames))
+        first, last = int(np.searchsorted(stamps, start)), int(np.searchsorted(stamps, end, side="right"))
+        return stamps[first:last], np.stack([f[1] for f in list(self._frames)[first:last]]) if last > first else None
+
+    def _decide(self, start, end):
+        p = self.params
+        self.counters["segments"] += 1
+        if start < self._blocked_until:
+            return []
+        if end - start < p["min_duration_s"]:
+            self.counters["short"] += 1
+            return []
+        stamps, joints = self._segment(start, end)
+        if joints is None or len(joints) < 4:
+            self.counters["short"] += 1
+            return []
+        extent = motion_extent(joints)
+        if extent < p["min_extent_m"]:
+            self.counters["small"] += 1
+            return []
+        quarter = int(np.searchsorted(stamps, stamps[0] + 0.25 * (stamps[-1] - stamps[0])))
+        variants = [joints] + ([joints[quarter:]] if len(joints) - quarter >= 4 else [])
+        results = self.classifier.classify_batch(variants)
+        best = max(results, key=lambda r: r.confidence)
+        if best.label14 not in self.allowed or best.confidence < p["min_confidence"]:
+            self.counters["unsure"] += 1
+            return []
+        self._blocked_until = float(stamps[-1]) + p["refractory_s"]
         self.counters["gestures"] += 1
         info = {
-            "start": pending.start,
-            "end": pending.end,
-            "label28": pending.label28,
-            "extent_m": round(pending.energy, 4),
+            "start": float(stamps[0]),
+            "end": float(stamps[-1]),
+            "label28": best.label28,
+            "extent_m": round(extent, 4),
         }
-        return [GestureEvent(pending.label, pending.confidence, pending.end, info)]
+        return [GestureEvent(best.label14, best.confidence, float(stamps[-1]), info)]

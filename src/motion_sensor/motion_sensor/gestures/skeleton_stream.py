@@ -16,12 +16,13 @@ def build_stream(sequences, labels, rng, rate=30.0, hold_s=(1.0, 3.0), move_s=0.
     ``sequences``: canonical skeleton sequences sampled at ``rate``; ``labels``: one per
     sequence; ``rng``: a seeded numpy Generator (hold lengths, tremor, and the order when
     ``order`` is None; pass ``range(len(sequences))`` to keep the given order). The stream
-    ends with a rest of ``hold_s[1]``.
+    starts and ends with a rest of ``hold_s[1]``.
     """
     if not len(sequences):
         raise ValueError("a stream needs at least one sequence")
     order = rng.permutation(len(sequences)) if order is None else list(order)
-    frames, truth = [], []
+    first = np.asarray(sequences[order[0]], dtype=float)
+    frames, truth = _rest(first[0], hold_s[1], rate, tremor_m, rng), []
     previous = None
     for i in order:
         seq = np.asarray(sequences[i], dtype=float)
