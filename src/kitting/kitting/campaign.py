@@ -106,6 +106,13 @@ class PartRecord:
     def success(self) -> bool:
         return self.final_state == "resting" and self.slot == self.trial.class_name
 
+    @property
+    def settled(self) -> bool:
+        """Come to rest, or given up by the kitting node (skipped: out of reach; failed):
+        nothing more will go into the tray for it, so its kit may be scored and swapped
+        without waiting for it to ride off the belt."""
+        return bool(self.final_state) or any(e.split(":")[0] in ("skipped", "failed") for e in self.events)
+
 
 class CampaignStats:
     """Collects observations, events and outcomes of the parts of a campaign."""

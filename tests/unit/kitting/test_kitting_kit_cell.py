@@ -127,3 +127,15 @@ def test_campaign_summary_has_kit_scores_misses_and_the_arrival_rate():
     assert summary["kits"] == 1 and summary["kits_complete"] == 0
     assert summary["kit_score"] == 3 and summary["kit_score_max"] == 12
     assert np.isclose(summary["kit_score_rate"], 0.25)
+
+
+def test_a_part_given_up_by_the_node_settles_its_kit_before_it_rides_off():
+    stats = CampaignStats()
+    for k, name in enumerate(("nut_yellow", "nut_silver", "bolt_silver")):
+        stats.add_part(Trial(k, name, 0.0, 0.0), k + 1, 0.0)
+    stats.add_event(1, "skipped: part leaves the reach window before the arm can get there")
+    stats.add_event(2, "failed: not placed: no evidence the part is held")
+    assert stats.parts[1].settled and stats.parts[2].settled
+    assert not stats.parts[3].settled  # on its way
+    stats.resolve(3, "resting", "bolt_silver", 20.0)
+    assert stats.parts[3].settled
