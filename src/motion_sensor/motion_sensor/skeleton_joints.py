@@ -37,6 +37,8 @@ Every consumer of skeletons (the recognizer, the spotter, the devices publishing
 ``HandSkeleton``) goes through this module. No ROS import.
 """
 
+import math
+
 import numpy as np
 
 __all__ = [
@@ -96,12 +98,14 @@ def leap_to_canonical(palm, direction, fingers, wrist=None):
     out = np.empty((N_JOINTS, 3))
     if wrist is None:
         heading = np.asarray(direction, dtype=float)
-        heading = heading / max(float(np.linalg.norm(heading)), 1e-9)
-        wrist = palm - heading * float(np.linalg.norm(joints[2, 0] - palm))
+        reach = math.dist(joints[2, 0], palm) / max(math.hypot(*heading), 1e-9)
+        wrist = palm - heading * reach
     out[0] = wrist
     out[1] = palm
     out[2:] = joints.reshape(20, 3)
-    return check_skeleton(out, "Leap skeleton")
+    if not np.isfinite(out).all():
+        raise ValueError("Leap skeleton: joint coordinates must be finite")
+    return out
 
 
 def mediapipe_to_canonical(landmarks):

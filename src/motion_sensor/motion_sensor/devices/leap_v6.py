@@ -128,23 +128,25 @@ def hand_skeletons(pointables, hands) -> dict:
     if not isinstance(pointables, list):
         return {}
     for pointable in pointables:
-        if not isinstance(pointable, dict) or pointable.get("type") not in range(5):
+        # Plain lists and one array per finger: this runs on every frame before the palm
+        # is published (a per-vector validation cost twice the palm's own parse).
+        if not isinstance(pointable, dict) or pointable.get("type") not in (0, 1, 2, 3, 4):
             continue
         try:
-            joints = [_vector(pointable, key) for key in _FINGER_JOINTS]
-        except MotionSensorError:
+            joints = np.array([pointable[key] for key in _FINGER_JOINTS], dtype=float)
+        except (KeyError, TypeError, ValueError):
             continue
-        fingers.setdefault(pointable.get("handId"), {})[pointable["type"]] = np.array(joints)
+        if joints.shape == (4, 3):
+            fingers.setdefault(pointable.get("handId"), {})[pointable["type"]] = joints
     skeletons = {}
     for hand in hands:
         found = fingers.get(hand.hand_id, {})
         if len(found) != 5 or hand.direction is None:
             continue
         leap = np.stack([found[f] for f in range(5)])  # (5, 4, 3) mm, Leap axes
-        try:
-            skeletons[hand.hand_id] = leap_to_canonical(hand.position, hand.direction, leap @ LEAP_TO_REP103.T / 1000.0)
-        except ValueError:
+        if not np.all(np.isfinite(leap)):
             continue
+        skeletons[hand.hand_id] = leap_to_canonical(hand.position, hand.direction, leap @ (LEAP_TO_REP103.T / 1000.0))
     return skeletons
 
 
