@@ -324,7 +324,8 @@ class DepthHandTracker:
         offsets = pts - centre
         dist3 = np.einsum("ij,ij->i", offsets, offsets)
         palm_r = peak * zc / intr.fx
-        palm = offsets[dist3 <= (0.6 * palm_r) ** 2]  # the palm's middle: clear of the thicker wrist
+        # The palm's middle, clear of the thicker wrist; 2 cm at least, for a palm seen edge-on.
+        palm = offsets[dist3 <= max(0.6 * palm_r, 0.02) ** 2]
         near = offsets[dist3 <= c["hand_radius_m"] ** 2]
         if len(palm) < 6 or len(near) < 10:
             self.last_reason = "too few points for the hand axes"
