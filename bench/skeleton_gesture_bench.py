@@ -11,7 +11,8 @@ trained on the other 16 subjects only); the shipped model is trained on all 20.
     from the same 16 subjects, every ``--dtw-stride``-th test sequence) in the same run;
     confusion matrix PNG (14 classes);
 (b) time per classification of the SHIPPED model through onnxruntime, 1 intra-op thread,
-    one sequence at a time, features included (p50/p99);
+    one sequence at a time, features included (p50/p99; and of each sequence's fastest of
+    3 runs, which a load spike of the shared machine does not hit);
 (c) spotting on continuous streams: the held-out subjects' sequences, one stream per
     subject, concatenated in a seeded random order with idle gaps (the hand comes to rest,
     holds still with 1 mm tremor for 1-3 s, then moves to the next start in 0.5 s), 30 Hz,
@@ -82,6 +83,18 @@ def dtw_baseline(train, test, stride):
         times.append((time.perf_counter() - start) * 1000.0)
         right += result.candidate == CLASSES_14[test.label14[i]]
     return {"accuracy14": round(right / len(chosen), 4), "n_test": len(chosen), "ms": stats(times)}
+
+
+def best_of_repeats(classifier, sequences, repeats):
+    """p50/p99 over sequences of each one's fastest of ``repeats`` classifications: a load
+    spike of the shared machine hits one run, not all three."""
+    ms = np.full(len(sequences), np.inf)
+    for _ in range(repeats):
+        for i, sequence in enumerate(sequences):
+            start = time.perf_counter()
+            classifier.classify(sequence)
+            ms[i] = min(ms[i], (time.perf_counter() - start) * 1000.0)
+    return stats(ms)
 
 
 def plot_confusion(path, matrix, accuracy):
@@ -232,6 +245,7 @@ def main():
     plot_confusion(plot_path, a14["confusion"], a14["accuracy"])
     log("(b) shipped model timing")
     timing = evaluate_skeleton(shipped, held, 14)
+    best = best_of_repeats(shipped, held.sequences, 3)
     log("(c) spotting on continuous held-out streams")
     spotting = spotting_bench(fold_model, held, args.seed)
     log("(d) false positives on the Leap recordings")
@@ -249,6 +263,7 @@ def main():
         "timing_shipped_model_ms": {
             "p50": timing["ms_per_classification_p50"],
             "p99": timing["ms_per_classification_p99"],
+            "best_of_3_per_sequence": best,
             "dtw_baseline_p50_ratio": round(baseline["ms"]["p50"] / timing["ms_per_classification_p50"], 2),
             "model_bytes": os.path.getsize(shipped.model_path),
         },
