@@ -11,7 +11,8 @@ Its subpackages and modules, by role:
 - ``gestures``: static poses, dynamic (DTW) gestures, the recognizer the node runs, and
   the hand-skeleton gesture network;
 - ``skeleton_joints``: the one canonical 22-joint hand skeleton and the mapping of Leap
-  bones, MediaPipe landmarks and SHREC'17 joints onto it;
+  bones, MediaPipe landmarks and SHREC'17 joints onto it; ``skeleton_sample``
+  (``SkeletonSample``, the ROS-free form of a ``motion_sensor/HandSkeleton`` message);
 - ``registration``: hand space to robot space by DTW-aligned paths;
 - ``testing``: test doubles (``synthetic_depth``: ray-cast depth images of a hand), for
   tests and benchmarks only;

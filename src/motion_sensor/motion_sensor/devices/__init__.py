@@ -23,7 +23,8 @@ Its modules:
 - ``hand_landmarks``: palm pose, depth and strengths from 21 hand landmarks (no MediaPipe);
 - ``mediapipe_hands``: MediaPipe Hands as a landmark detector;
 - ``webcam_hand``: hand tracking in webcam images;
-- ``webcam_device``: a webcam or video file as a device.
+- ``webcam_device``: a webcam or video file as a device;
+- ``shrec_stream``: a SHREC'17 skeleton file (.npz) played as a live hand with idle gaps.
 """
 
 from motion_common.lazy_exports import lazy_exports

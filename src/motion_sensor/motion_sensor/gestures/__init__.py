@@ -16,7 +16,9 @@ Its modules:
 - ``skeleton_network``: the network in torch (training only);
 - ``skeleton_training``: training, augmentation and ONNX export (torch, training only);
 - ``train_skeleton_gestures``: the training command (user-independent estimate, export);
-- ``skeleton_eval``: ``gesture_eval --skeleton``, the shipped model on a .npz.
+- ``skeleton_eval``: ``gesture_eval --skeleton``, the shipped model on a .npz;
+- ``skeleton_spotter``: online spotting of skeleton gestures (motion between two rests);
+- ``skeleton_stream``: continuous streams of segmented gestures with idle gaps.
 """
 
 from motion_common.lazy_exports import lazy_exports

@@ -3,7 +3,8 @@
 Its modules:
 
 - ``filters``: the pose filters (mean, One Euro, Kalman IMM) and their parameters;
-- ``sequencer``: validation, device binding, timing, trims, jump rejection, filtering.
+- ``sequencer``: validation, device binding, timing, trims, jump rejection, filtering;
+- ``skeleton_gate``: a skeleton passes exactly when the sequencer passed its palm frame.
 """
 
 from motion_common.lazy_exports import lazy_exports
