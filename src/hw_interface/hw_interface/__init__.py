@@ -8,7 +8,8 @@ Its modules, by role:
 - the driver contract: ``robot_hw`` (``RobotDriver``, the template every driver
   implements: the paper's API plus what real controllers need), ``registry`` (drivers by
   name: the built-ins and any package's ``hw_interface.drivers`` entry point);
-- drivers: ``sim_driver`` (pybullet simulation), ``ur_driver`` (Universal Robots over
+- drivers: ``sim_driver`` (pybullet simulation; ``scene_camera`` renders its cell in a
+  process of its own), ``ur_driver`` (Universal Robots over
   ur_rtde), ``industrial_driver`` (ROS-Industrial controllers over ``simple_message``, the
   wire format, and ``tcp``, how its sockets close), with ``trajectory`` (MoveJ/MoveL time
   parameterisation) and ``stream_follower`` (streamed joint targets within the velocity
