@@ -35,9 +35,7 @@ def test_teach_session_runs_on_skeleton_gestures(tmp_path):
     data = load_skeleton_dataset(os.path.join(DATA, "shrec17_slice.npz"))
     picked = []
     for name in ORDER:
-        picked.append(
-            next(i for i in range(len(data)) if data.subject[i] == 2 and CLASSES_14[data.label14[i]] == name)
-        )
+        picked.append(next(i for i in range(len(data)) if data.subject[i] == 2 and CLASSES_14[data.label14[i]] == name))
     stamps, joints, truth = build_stream(
         [data.sequences[i] for i in picked], list(ORDER), np.random.default_rng(5), order=range(len(picked))
     )
