@@ -81,8 +81,9 @@ GESTURE_RECOGNIZER = NodeInterface(
 SKELETON_GESTURE_SPOTTER = NodeInterface(
     "motion_sensor",
     "skeleton_gesture_spotter",
-    "Spots hand-skeleton gestures (the shipped ONNX model on sliding windows, idle gate, non-maximum "
-    "suppression, refractory period) in the sequenced skeleton stream; publishes each with its start and end.",
+    "Spots hand-skeleton gestures (motion between two rests, classified by the shipped ONNX model; confidence, "
+    "duration and extent gates, refractory period) in the sequenced skeleton stream; publishes each with its "
+    "start and end.",
     SKELETON_SPOTTER_PARAMS.merged(
         ParamSchema(
             [

@@ -1,6 +1,6 @@
 """Skeletons through the framework without ROS: the Leap parser's skeletons, the SHREC'17
-stream device, the sequencer's skeleton gate, and the spotter's idle gate, non-maximum
-suppression and refractory period (with a stand-in classifier), then the spotter with the
+stream device, the sequencer's skeleton gate, and the spotter's rest-bounded segments and
+refractory period (with a stand-in classifier), then the spotter with the
 shipped model on a stream of real sequences (tests/data/shrec17_slice.npz)."""
 
 import os
@@ -124,7 +124,7 @@ def _hand_stream(moves, rate=30.0):
     return stamps, frames
 
 
-def test_spotter_idle_gate_nms_and_refractory():
+def test_spotter_segments_between_rests():
     stand_in = StandIn()
     spotter = SkeletonSpotter(stand_in, {"min_confidence": 0.8})
     stamps, frames = _hand_stream(moves=[3.0, 8.0])
