@@ -16,7 +16,8 @@ Its modules, by role (the robot model itself is ``motion_common.kinematics``):
 - ``program``: the program file of a gesture-taught task (read and written by both
   applications);
 - ``session_report``: a teleop session's figures and plot, in bounded memory
-  (``latency_stats``: streaming latency percentiles in a fixed histogram);
+  (``latency_stats``: streaming latency percentiles in a fixed histogram; ``lag_estimate``:
+  how far one path trails another, the hand-to-tool delay);
 - ``server_watch``: whether the robot server is alive (failed calls, stale joint_states),
   probed with backoff while it is lost;
 - ``errors``: ``MotionCommanderError``.
