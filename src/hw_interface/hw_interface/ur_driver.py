@@ -103,7 +103,7 @@ class URRtdeDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
                 "s",
                 "servoJ lookahead (ur_rtde range): the controller smooths the stream over it and the arm trails by "
                 "about as much; the follower already limits the stream's speed and acceleration, so the shortest "
-                "(bench/hand_to_tool: hand to tool 60 ms at 0.03 s, 74 at 0.05, 110 at 0.1)",
+                "(bench/hand_to_tool: hand to tool 61 ms at 0.03 s, 75 at 0.05, 112 at 0.1)",
                 low=0.03,
                 high=0.2,
             ),
