@@ -175,3 +175,16 @@ def test_spotter_with_the_shipped_model_on_real_sequences():
     hits = sum(any(e.name == label and start <= e.stamp <= end + 1.0 for e in events) for label, start, end in truth)
     assert hits >= 0.7 * len(truth)
     assert len(events) <= len(truth) + 2
+
+
+def test_webcam_landmarks_give_a_metric_skeleton_where_the_palm_is():
+    from motion_sensor.devices.hand_landmarks import palm_pose
+    from motion_sensor.skeleton_joints import mediapipe_to_canonical
+
+    from .test_webcam_hand import K, facing_camera, local_hand, place
+
+    pose = palm_pose(place(local_hand(), facing_camera(), [0.05, -0.02, 0.5]), K)
+    skeleton = mediapipe_to_canonical(pose.landmarks)
+    np.testing.assert_allclose(skeleton[1], pose.position, atol=1e-9)  # the same palm centre
+    np.testing.assert_allclose(skeleton[JOINT_NAMES.index("index_tip")], pose.index_tip, atol=1e-9)
+    assert skeleton[JOINT_NAMES.index("middle_tip"), 2] > skeleton[0, 2] + 0.05  # fingers up, in metres
