@@ -204,6 +204,9 @@ class CampaignStats:
                 dict(
                     asdict(r.trial),
                     spawned=r.spawned,
+                    sightings=len(r.pose_errors_mm),
+                    pose_error_mm_p95=float(np.percentile(r.pose_errors_mm, 95)) if r.pose_errors_mm else math.nan,
+                    pose_error_mm_max=max(r.pose_errors_mm, default=math.nan),
                     part_id=r.part_id,
                     success=r.success,
                     predicted=r.predicted,
