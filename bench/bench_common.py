@@ -1,7 +1,9 @@
-"""Shared by the benchmark scripts: where results go and how they are written."""
+"""Shared by the benchmark scripts: where results go and how they are written, and one
+teleop session run for its summary."""
 
 import json
 import os
+import subprocess
 import sys
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
@@ -19,3 +21,17 @@ def write_results(name: str, results: dict, show: bool = True) -> str:
         print(json.dumps(results, indent=2))
     print(f"written to {path}")
     return path
+
+
+def teleop_session(port: int, out: str, args, timeout: float = 600.0, what: str = "the session") -> dict:
+    """Run launch/teleop_sim.launch on its own master (``port``) with ``args`` (name:=value,
+    output_dir:=``out`` added) until it ends; return its session_summary.json."""
+    env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{port}")
+    launch = os.path.join(ROOT, "src", "motion_bringup", "launch", "teleop_sim.launch")
+    cmd = ["roslaunch", "-p", str(port), launch, f"output_dir:={out}", *args]
+    subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=timeout, check=False)
+    path = os.path.join(out, "session_summary.json")
+    if not os.path.exists(path):
+        raise RuntimeError(f"{what} wrote no summary; run scripts/teleop_sim {' '.join(args)} to see why")
+    with open(path, encoding="utf-8") as stream:
+        return json.load(stream)

@@ -39,7 +39,7 @@ import time
 
 import numpy as np
 
-from bench_common import RESULTS, write_results
+from bench_common import RESULTS, teleop_session, write_results
 from transport_floor import VARIANTS, run_floor
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
@@ -67,26 +67,8 @@ def passes_for(name, min_commands):
 
 def run_session(recording, repeat=1):
     """Run one teleop session on ``recording`` (``repeat`` passes); return its summary dict."""
-    out = tempfile.mkdtemp(prefix="e2e-")
-    env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}")
-    cmd = [
-        "roslaunch",
-        "-p",
-        str(PORT),
-        os.path.join(ROOT, "src", "motion_bringup", "launch", "teleop_sim.launch"),
-        f"recording:={recording_path(recording)}",
-        f"output_dir:={out}",
-        f"repeat:={repeat}",
-    ]
-    subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=600, check=False)
-    path = os.path.join(out, "session_summary.json")
-    if not os.path.exists(path):
-        raise RuntimeError(
-            f"the session on {recording} wrote no summary; run scripts/teleop_sim "
-            f"recording:={recording_path(recording)} to see why"
-        )
-    with open(path, encoding="utf-8") as fh:
-        return json.load(fh)
+    args = [f"recording:={recording_path(recording)}", f"repeat:={repeat}"]
+    return teleop_session(PORT, tempfile.mkdtemp(prefix="e2e-"), args, what=f"the session on {recording}")
 
 
 class FloorMaster:

@@ -23,13 +23,12 @@ import json
 import os
 import resource
 import shutil
-import subprocess
 import tempfile
 import time
 
 import numpy as np
 
-from bench_common import RESULTS, write_results
+from bench_common import RESULTS, teleop_session, write_results
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 PORT = 11491
@@ -44,31 +43,15 @@ def _children_cpu() -> float:
 def run_session(recording: str, repeat: int, record: bool, camera: bool) -> dict:
     """One teleop session; its summary plus cpu_s and wall_s (and the episode, if recorded)."""
     out = tempfile.mkdtemp(prefix="rec-cost-")
-    env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}")
-    cmd = [
-        "roslaunch",
-        "-p",
-        str(PORT),
-        os.path.join(ROOT, "src", "motion_bringup", "launch", "teleop_sim.launch"),
-        f"recording:={os.path.join(ROOT, 'tests', 'data', recording + '.jsonl.gz')}",
-        f"output_dir:={out}",
-        f"repeat:={repeat}",
-    ]
+    args = [f"recording:={os.path.join(ROOT, 'tests', 'data', recording + '.jsonl.gz')}", f"repeat:={repeat}"]
     dataset = os.path.join(out, "dataset")
     if record:
-        cmd += [f"dataset:={dataset}", "dataset_start:=true"]
+        args += [f"dataset:={dataset}", "dataset_start:=true"]
         if camera:
-            cmd += ["dataset_camera:=scene"]
+            args += ["dataset_camera:=scene"]
     cpu0, wall0 = _children_cpu(), time.monotonic()
-    subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=900, check=False)
+    summary = teleop_session(PORT, out, args, timeout=900, what=f"the session (recording {'on' if record else 'off'})")
     cpu, wall = _children_cpu() - cpu0, time.monotonic() - wall0
-    try:
-        with open(os.path.join(out, "session_summary.json"), encoding="utf-8") as stream:
-            summary = json.load(stream)
-    except FileNotFoundError:
-        raise RuntimeError(
-            f"the session ({'on' if record else 'off'}) wrote no summary: see scripts/teleop_sim"
-        ) from None
     row = {
         "latency_p50_ms": summary["latency_p50_ms"],
         "latency_p99_ms": summary["latency_p99_ms"],
