@@ -780,9 +780,12 @@ def test_pipeline_re_registers_a_moved_camera(cell, rendered):
     assert pipeline.counts["camera moved: re-registered"] == 1
 
 
-def _cover_markers(cell, camera, image):
+def _cover_markers(cell, camera, image, marker_ids=None):
+    """The image with the cell's markers (or only those in ``marker_ids``) painted over (grey)."""
     covered = image.copy()
     for marker in cell.markers:
+        if marker_ids is not None and marker.id not in marker_ids:
+            continue
         _, ratio = marker_image(marker.dictionary, marker.id)
         half = marker.size * ratio / 2 + 0.005
         corners = (

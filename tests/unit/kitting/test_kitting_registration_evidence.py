@@ -4,16 +4,14 @@ a frame that shows no marker keeps the last registration only for registration_m
 
 import math
 
-import cv2
 import numpy as np
 import pytest
 
 from kitting.calibration import extrinsics_from_marker, pose_error
 from kitting.cell import load_cell
-from kitting.sim_scene import marker_image
 from kitting.vision_pipeline import VisionPipeline
 
-from .test_kitting_cell import _assert_parts_located, rendered  # noqa: F401  (the rendered images fixture)
+from .test_kitting_cell import _assert_parts_located, _cover_markers, rendered  # noqa: F401  (the rendered images fixture)
 
 
 @pytest.fixture(scope="module")
@@ -22,19 +20,7 @@ def cell():
 
 
 def _cover(cell, camera, image, marker_ids):
-    """The image with the given markers painted over (grey)."""
-    covered = image.copy()
-    for marker in cell.markers:
-        if marker.id not in marker_ids:
-            continue
-        _, ratio = marker_image(marker.dictionary, marker.id)
-        half = marker.size * ratio / 2 + 0.005
-        corners = (
-            marker.pose
-            @ np.array([[-half, half, 0, 1], [half, half, 0, 1], [half, -half, 0, 1], [-half, -half, 0, 1]]).T
-        ).T[:, :3]
-        cv2.fillConvexPoly(covered, np.round(camera.project(corners)).astype(np.int32), (128, 128, 128))
-    return covered
+    return _cover_markers(cell, camera, image, marker_ids)
 
 
 def _pipeline(cell, camera, prior=None, **params):
