@@ -37,7 +37,6 @@ TUNING_STILL = ["Waiting-110fps", "waiting-short"]
 TUNING_MOVING = ["wave", "flapping", "test-paddle-rightwards", "rollAndPitchCropped"]
 EVALUATION_STILL = ["HandSplay-110fps"]
 EVALUATION_MOVING = ["brian", "grab", "gun", "three-claps", "rollAndPitchWithEntry", "confidence-demo", "pinch"]
-STILL, MOVING = TUNING_STILL, TUNING_MOVING  # the sweeps' sets
 SHARED = os.path.join(ROOT, "..", "shared", "data", "leap_v6")
 SLOW_SPEEDS = (0.02, 0.05, 0.1, 0.2, 0.5)  # m/s, ramps added to a still-hand recording
 # Curve name -> (filter name, parameter sets). "one_euro" and "kalman" are the shipped
@@ -145,7 +144,7 @@ def lag_mm(raw, filtered, skip=10):
     return float(np.mean(np.linalg.norm(filtered[skip:] - raw[skip:], axis=1))) * 1000
 
 
-def evaluate(data, produce, still=STILL, moving=MOVING):
+def evaluate(data, produce, still=TUNING_STILL, moving=TUNING_MOVING):
     """(jitter, lag) averaged over the still and the moving recordings."""
     jitter = np.mean([jitter_mm(data[n][0], produce(n)) for n in still])
     lag = np.mean([lag_mm(data[n][1], produce(n)) for n in moving])

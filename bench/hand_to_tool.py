@@ -44,7 +44,7 @@ import numpy as np
 from bench_common import RESULTS, write_results
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src", "motion_commander"))
-from motion_commander.lag_estimate import LAGS_S, MIN_SPAN_M, best_lag, trailing_lag  # noqa: E402, F401
+from motion_commander.lag_estimate import MIN_SPAN_M, trailing_lag  # noqa: E402
 from motion_common.launch_args import declared_args  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))

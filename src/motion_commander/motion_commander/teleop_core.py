@@ -358,10 +358,6 @@ class TeleopCore:
         result = self.kinematics.solve_ik(pin.SE3(rotation, position), seed)
         return self.margin.apply(result.joints)[0] if result.success else None
 
-    def _blend(self, fraction, goal):
-        """The joints ``fraction`` of the way from the command to ``goal``, as a float list."""
-        return [c + fraction * (g - c) for c, g in zip(self._command.tolist(), goal.tolist())]
-
     def _limited_step(self, target_position, target_rotation, overshoot, goal, dt, speed):
         """(joints, stop, ratio) for a frame whose IK target ``goal`` is ``overshoot`` (> 1)
         times too far for one step: the tool position first, the orientation with what speed
@@ -379,7 +375,7 @@ class TeleopCore:
         far off the path when the IK solution moved a lot.
         """
         limiter = self.limiter
-        held = self._partial_step(target_position, target_rotation, 1.0, 0.0, np.array(self._blend(0.0, goal)))
+        held = self._partial_step(target_position, target_rotation, 1.0, 0.0, self._command)
         fraction = None if held is None else limiter.fraction_within(self._command, held, goal, dt, speed)
         if fraction is not None:
             joints = held
@@ -397,9 +393,8 @@ class TeleopCore:
         # Seeded the same fraction of the way in joint space: for the small steps of a
         # stream that point already lies within the IK's tolerance of the Cartesian one
         # (the solve then ends at its first check), and otherwise it is the closer start.
-        joints = self._partial_step(
-            target_position, target_rotation, fraction, fraction, np.array(self._blend(fraction, goal))
-        )
+        seed = np.array([c + fraction * (g - c) for c, g in zip(self._command.tolist(), goal.tolist())])
+        joints = self._partial_step(target_position, target_rotation, fraction, fraction, seed)
         return (goal if joints is None else joints), goal, None
 
     def _command_for(self, stamp, now, position, orientation) -> TeleopCommand | None:

@@ -10,7 +10,8 @@ import pytest
 from ..conftest import ROOT
 
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-from hand_to_tool import best_lag, stage_lags  # noqa: E402
+from hand_to_tool import stage_lags  # noqa: E402
+from motion_commander.lag_estimate import best_lag  # noqa: E402
 
 
 def hand_path(rng, seconds=4.0, rate=110.0):
