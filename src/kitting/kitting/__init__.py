@@ -8,7 +8,8 @@ Its modules, by role:
   markers and camera from ``config/cell.yaml``), ``meshes`` (the parts' render meshes);
 - simulation: ``sim_scene`` (the cell in pybullet), ``cell_sim`` (its physics around the
   simulated arm), ``camera`` (pybullet rendering of the pinhole camera of
-  ``motion_common.camera_model``), ``render_worker`` (rendering in a process of its own);
+  ``motion_common.camera_model``), ``render_worker`` (rendering in a process of its own,
+  with the arm drawn), ``camera_effects`` (a real camera's motion blur and exposure);
 - camera input: ``frame_source`` (webcam, video file, image folder: the frame sources of
   ``motion_common.video_capture``, a lost camera reopened with backoff), ``image_msgs``
   (``sensor_msgs`` image and camera info conversions without cv_bridge),
@@ -16,7 +17,8 @@ Its modules, by role:
   ``calibration_views`` (choosing calibration views from a stream);
 - vision: ``detector`` (the detectors' base and the classical OpenCV detector), ``onnx_detector`` (a YOLOv8 ONNX
   model through onnxruntime), ``geometry`` (pixel to belt plane), ``vision`` (detections
-  to belt-plane poses), ``vision_pipeline`` (one image in, the parts on the belt out),
+  to belt-plane poses), ``robot_silhouette`` (where the arm and gripper are in the image,
+  from the joints), ``vision_pipeline`` (one image in, the parts on the belt out),
   ``annotated_image`` (the image with its detections drawn, for the operator's dashboard);
 - picking: ``tracking`` (a Kalman filter per part), ``intercept`` (where and when to meet
   a part on the moving belt), ``picker`` (the kitting cycle), ``slot_program`` (tray slot
@@ -47,6 +49,9 @@ _PUBLIC = {
     "Lighting": "camera",
     "render": "camera",
     "RenderWorker": "render_worker",
+    "Exposure": "camera_effects",
+    "ExposureDrift": "camera_effects",
+    "RobotSilhouette": "robot_silhouette",
     "FrameSource": "frame_source",
     "FrameSourceError": "frame_source",
     "open_source": "frame_source",

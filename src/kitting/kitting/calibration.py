@@ -266,7 +266,7 @@ def _inner_corners(image, observation: MarkerObservation, margin_px: float) -> n
 
 
 def extrinsics_from_marker(
-    image, markers, K, distortion, require_all: bool = False, edge_corners: bool = False
+    image, markers, K, distortion, require_all: bool = False, edge_corners: bool = False, occluded=None
 ) -> Extrinsics:
     """Camera pose in the robot base frame from one image of the cell's marker(s) (a Marker
     or a list). Every visible marker's four corners, in base coordinates from the cell
@@ -274,12 +274,18 @@ def extrinsics_from_marker(
     SOLVEPNP_IPPE (coplanar points) refined by Levenberg-Marquardt. With ``require_all`` a
     missing or partly hidden marker refuses the calibration. With ``edge_corners`` a
     marker found at the image border still gives its corners that lie inside the image
-    (they join the other markers' corners; alone, fewer than four corners fix nothing)."""
+    (they join the other markers' corners; alone, fewer than four corners fix nothing).
+    ``occluded`` (uint8 mask, 255 = covered by the robot arm): a marker whose square comes
+    within 3 px of it counts as missing ("hidden by the arm"): a corner the arm's edge
+    touches may be found off its place."""
     markers = [markers] if isinstance(markers, Marker) else list(markers)
     objects, pixels, used, missing, hidden, single = [], [], [], [], [], None
     edge_objects, edge_pixels = [], []
     for marker in markers:
         observation = observe_marker(image, marker, K, distortion)
+        if observation.ok and occluded is not None and _touches(occluded, observation.corners, 3):
+            missing.append((marker.id, "hidden by the arm"))
+            continue
         if not observation.ok:
             missing.append((marker.id, observation.reason))
             if observation.partly_outside:
@@ -313,6 +319,16 @@ def extrinsics_from_marker(
     projected, _ = cv2.projectPoints(objects, rvec, T_cam_base[:3, 3], K, distortion)
     error = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - pixels) ** 2, axis=1))))
     return Extrinsics(True, "", np.linalg.inv(T_cam_base), error, used, missing, hidden, objects, pixels, edge_count)
+
+
+def _touches(mask, corners, margin_px: int) -> bool:
+    """Whether the quadrilateral ``corners`` (4 x 2 px), grown by ``margin_px``, covers a
+    set pixel of ``mask``."""
+    quad = np.zeros(mask.shape, np.uint8)
+    polygon = np.round(np.asarray(corners, float).reshape(-1, 2)).astype(np.int32)
+    cv2.fillConvexPoly(quad, polygon, 255)
+    cv2.polylines(quad, [polygon], True, 255, thickness=2 * margin_px + 1)
+    return bool(np.any((quad > 0) & (mask > 0)))
 
 
 def pose_error(T_estimate, T_true) -> tuple[float, float]:

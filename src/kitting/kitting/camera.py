@@ -69,7 +69,12 @@ class Lighting:
 
 
 def render(
-    client: int, camera: PinholeCamera, lighting: Lighting | None = None, depth: bool = False, supersample: int = 1
+    client: int,
+    camera: PinholeCamera,
+    lighting: Lighting | None = None,
+    depth: bool = False,
+    supersample: int = 1,
+    segmentation: bool = False,
 ):
     """Render the scene of pybullet client ``client`` as seen by ``camera`` with the CPU
     TinyRenderer. Returns an RGB uint8 image (height x width x 3), and with ``depth`` also
@@ -79,18 +84,31 @@ def render(
     from where a real sensor (which integrates over each pixel) would put it. With
     ``supersample`` = s the scene is rendered at s times the size and area-averaged down,
     as a sensor does (s² times the cost): use it where sub-pixel edges matter (the
-    calibration images); the detector does not need it."""
+    calibration images); the detector does not need it.
+
+    With ``segmentation`` (not with ``depth``) it returns (RGB, the body id of each pixel,
+    -1 where none: int32, height x width; sampled, not averaged, when supersampled)."""
     lighting = lighting or Lighting()
+    if segmentation and depth:
+        raise ValueError("render: depth and segmentation together are not supported")
     if supersample > 1:
-        big = render(client, camera.scaled(camera.width * supersample, camera.height * supersample), lighting, depth)
+        big = render(
+            client,
+            camera.scaled(camera.width * supersample, camera.height * supersample),
+            lighting,
+            depth,
+            segmentation=segmentation,
+        )
         size = (camera.width, camera.height)
+        if segmentation:
+            return cv2.resize(big[0], size, interpolation=cv2.INTER_AREA), big[1][::supersample, ::supersample].copy()
         if not depth:
             return cv2.resize(big, size, interpolation=cv2.INTER_AREA)
         return (
             cv2.resize(big[0], size, interpolation=cv2.INTER_AREA),
             cv2.resize(big[1], size, interpolation=cv2.INTER_AREA),
         )
-    _, _, rgba, buffer, _ = p.getCameraImage(
+    _, _, rgba, buffer, seg = p.getCameraImage(
         camera.width,
         camera.height,
         viewMatrix=view_matrix(camera),
@@ -102,10 +120,14 @@ def render(
         lightAmbientCoeff=lighting.ambient,
         lightDiffuseCoeff=lighting.diffuse,
         lightSpecularCoeff=lighting.specular,
-        flags=p.ER_NO_SEGMENTATION_MASK,
+        flags=0 if segmentation else p.ER_NO_SEGMENTATION_MASK,
         physicsClientId=client,
     )
     rgb = np.asarray(rgba, np.uint8).reshape(camera.height, camera.width, 4)[:, :, :3].copy()
+    if segmentation:
+        # pybullet packs the link index into the high bits (objectUniqueId + (linkIndex + 1) << 24)
+        ids = np.asarray(seg, np.int64).reshape(camera.height, camera.width)
+        return rgb, np.where(ids < 0, -1, ids & ((1 << 24) - 1)).astype(np.int32)
     if not depth:
         return rgb
     buffer = np.asarray(buffer, np.float32).reshape(camera.height, camera.width)

@@ -46,6 +46,15 @@ colour purity and how well the shape features match.
 
 ``PartDetector`` is the base of this detector and of the ONNX one (``onnx_detector``):
 the image check of step 1, the belt mask, its eroded inner region, and the records.
+
+Occlusion: ``occluded`` (set per image by the vision pipeline from the robot's joints,
+``kitting.robot_silhouette``) marks the pixels the arm and gripper cover. They are never
+foreground (the light grey arm would pass for a silver part), and a blob that touches them
+(within ``edge_px``) is rejected as "hidden by the arm": only part of it is seen, so its
+centroid and shape would be wrong. The tracker then gets no sighting of the part: it holds
+its prediction, or drops the track, instead of jumping to a half-part's centroid. A
+detector that finds no blobs (ONNX) drops every detection whose centre lies within
+``OCCLUSION_REACH_PX`` of the covered pixels.
 """
 
 import abc
@@ -110,6 +119,10 @@ DETECTOR_SCHEMA = ParamSchema(
 # pixel staircase (about 1 px = 0.9 mm at 640x480, 1.8 mm at 320x240), below the 5.2 mm by
 # which each corner of the hexagon stands out of the chord between its neighbours.
 NUT_POLYGON_EPSILON_MM = 0.1 * 1000.0 * PART_CLASSES["nut_yellow"].width
+# A bolt's half length in pixels at the cell camera's scale (~1.1 px/mm): a box detector's
+# detection centred this close to the arm may be a part the arm half hides.
+OCCLUSION_REACH_PX = 25
+HIDDEN = "hidden by the arm"
 
 
 @dataclass
@@ -123,7 +136,7 @@ class Detection:
 
 @dataclass
 class Rejection:
-    reason: str  # "corrupt image" | "edge" | "unknown object"
+    reason: str  # "corrupt image" | "edge" | "unknown object" | "hidden by the arm"
     pixel: tuple[float, float] | None = None
     detail: str = ""
 
@@ -193,18 +206,35 @@ class PartDetector(abc.ABC):
 
     name = "detector"
 
+    handles_occlusion = False  # True: _detect itself rejects blobs touching ``occluded``
+
     def __init__(self, belt_mask: np.ndarray | None = None):
         self.belt_mask = belt_mask
+        self.occluded: np.ndarray | None = None  # uint8, 255 = the arm covers it (this image)
         self._belt_inner = BeltInner()
 
     def detect(self, image) -> DetectionResult:
         """The parts in an RGB uint8 image (H x W x 3), and what was rejected and why."""
         result = DetectionResult()
         problem = input_problem(image, self.belt_mask)
+        if not problem and self.occluded is not None and self.occluded.shape != image.shape[:2]:
+            problem = f"image size {image.shape[1]}x{image.shape[0]} does not match the occlusion mask"
         if problem:
             result.rejections.append(Rejection("corrupt image", detail=problem))
             return result
         self._detect(image, result)
+        if self.occluded is not None and not self.handles_occlusion and self.occluded.any():
+            size = 2 * OCCLUSION_REACH_PX + 1
+            near = cv2.dilate(self.occluded, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size)))
+            h, w = near.shape
+            kept = []
+            for detection in result.detections:
+                x, y = (int(round(v)) for v in detection.pixel)
+                if 0 <= x < w and 0 <= y < h and near[y, x]:
+                    result.rejections.append(Rejection(HIDDEN, detection.pixel, "next to the arm"))
+                else:
+                    kept.append(detection)
+            result.detections = kept
         return result
 
     @abc.abstractmethod
@@ -221,6 +251,7 @@ class ClassicalDetector(PartDetector):
     metres`` on the belt plane (default: ``mm_per_px`` scale)."""
 
     name = "classical"
+    handles_occlusion = True
 
     def __init__(
         self,
@@ -242,9 +273,15 @@ class ClassicalDetector(PartDetector):
         silver = (sat < P["saturation_min"] * 0.5) & (val >= P["value_min"])
         foreground = (val >= P["value_min"]) | (sat >= P["saturation_min"])
         region = np.full((h, w), 255, np.uint8) if self.belt_mask is None else self.belt_mask
-        mask = np.where(foreground & (region > 0), 255, 0).astype(np.uint8)
-        # Edge zone: the image border and the belt region's border.
+        visible = region > 0
+        near_arm = None
         edge = P["edge_px"] + 1
+        if self.occluded is not None and self.occluded.any():
+            visible &= self.occluded == 0
+            size = 2 * edge + 1
+            near_arm = cv2.dilate(self.occluded, np.ones((size, size), np.uint8))
+        mask = np.where(foreground & visible, 255, 0).astype(np.uint8)
+        # Edge zone: the image border and the belt region's border.
         inner = self.belt_inner((h, w), edge)
         contours, hierarchy = cv2.findContours(mask, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_NONE)
         if hierarchy is None:
@@ -259,6 +296,9 @@ class ClassicalDetector(PartDetector):
             moments = cv2.moments(contour)
             centroid = (moments["m10"] / moments["m00"], moments["m01"] / moments["m00"])
             points = contour.reshape(-1, 2)
+            if near_arm is not None and np.any(near_arm[points[:, 1], points[:, 0]]):
+                result.rejections.append(Rejection(HIDDEN, centroid, "touches the arm's silhouette"))
+                continue
             if np.any(inner[points[:, 1], points[:, 0]] == 0):
                 result.rejections.append(Rejection("edge", centroid, "touches the image or belt border"))
                 continue

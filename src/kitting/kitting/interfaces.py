@@ -29,6 +29,7 @@ _TRAY_SWAPPED = Topic(
     "std_msgs/Empty",
     "the finished kit's tray was taken away: every slot is free again (one part per slot until then)",
 )
+_JOINTS = Topic("joint_states", "sensor_msgs/JointState", "the arm's measured joints (where the arm is in the image)")
 _STOP_LATCHED = Topic("motion_controller/stop_latched", "std_msgs/Bool", "the server's latched stop")
 
 _CELL_SIM_PARAMS = ParamSchema(
@@ -53,6 +54,29 @@ _CELL_SIM_PARAMS = ParamSchema(
         Param("state_rate", 20.0, "Hz", "ground-truth publishing rate", low=0.1, high=1000.0),
         Param("supersample", 1, "", "render at this multiple and average down (anti-aliasing)", low=1, high=4),
         Param("frame_id", "kitting_camera", "", "frame of the images"),
+        # A real camera's image (kitting.camera_effects); each can be turned off.
+        Param("render_robot", True, "", "draw the arm and magnet (from joint_states): they hide parts and markers"),
+        Param(
+            "exposure_time",
+            0.01,
+            "s",
+            "exposure of each image: the belt's parts are smeared over exposure x belt speed (0: sharp)",
+            low=0.0,
+            high=0.1,
+        ),
+        Param("exposure_drift", False, "", "vary gain, offset and gamma per image within their ranges (seeded)"),
+        Param("gain_range", [0.8, 1.2], "", "exposure gain range of exposure_drift", length=2, low=0.1, high=4.0),
+        Param(
+            "offset_range",
+            [-12.0, 12.0],
+            "levels",
+            "exposure offset range (of 0-255)",
+            length=2,
+            low=-100.0,
+            high=100.0,
+        ),
+        Param("gamma_range", [0.85, 1.2], "", "exposure gamma range", length=2, low=0.2, high=5.0),
+        Param("seed", 1, "", "random seed of exposure_drift"),
     ]
 )
 
@@ -66,6 +90,7 @@ KITTING_CELL_SIM = NodeInterface(
     subscribes=(
         Topic("motion_controller/tool_pose", "geometry_msgs/PoseStamped", "the arm's tool"),
         Topic("motion_controller/gripper", "std_msgs/Bool", "the arm's gripper"),
+        Topic(_JOINTS.name, _JOINTS.type, _JOINTS.doc, optional=True),
     ),
     serves=(
         Service("~spawn", "kitting/SpawnPart", "put a part on the belt"),
@@ -114,6 +139,14 @@ VISION_NODE = NodeInterface(
                 Param("cell", DEFAULT_CELL, doc="cell YAML"),
                 Param("intrinsics", "", doc="camera_info YAML; empty: from the CameraInfo topic"),
                 Param("detector_params", {}, doc="the detector's parameters"),
+                Param(
+                    "joint_state_max_age",
+                    0.05,
+                    "s",
+                    "largest gap between an image's stamp and the joint state that masks the arm in it",
+                    low=0.0,
+                    high=10.0,
+                ),
             ]
         )
     ),
@@ -131,7 +164,11 @@ VISION_NODE = NodeInterface(
             "the camera image with the detections drawn, JPEG, at most 2 Hz (for the operator's dashboard)",
         ),
     ),
-    subscribes=(_IMAGE, Topic(_INFO.name, _INFO.type, _INFO.doc, optional=True)),
+    subscribes=(
+        _IMAGE,
+        Topic(_INFO.name, _INFO.type, _INFO.doc, optional=True),
+        Topic(_JOINTS.name, _JOINTS.type, _JOINTS.doc, optional=True),
+    ),
 )
 
 KITTING_NODE = NodeInterface(
