@@ -9,7 +9,14 @@ Sequences are turned into the network's input frame (``skeleton_features.to_mode
 before anything else. Augmentation, drawn per sequence and epoch: a rotation (up to ``rotate_deg`` about the
 vertical axis, a third of it about the two others), a scale, Gaussian joint noise and a
 time warp (a random crop of up to ``crop`` of the sequence at each end and a smooth
-non-uniform speed).
+non-uniform speed), and with probability ``lead_in`` a way in: the hand rests for up to
+0.3 s 2-15 cm away and moves smoothly (0.2-0.6 s) to where the gesture starts, as in the
+windows the online spotter classifies.
+
+Rejection (outlier exposure): with a ``NegativeSource`` (``skeleton_negatives``: real Leap
+motion, transitions between gestures), each epoch adds ``reject_share`` x the training
+set's size of its windows, whose target is the uniform distribution over the classes
+(weight ``reject_weight``): the network learns to be unsure on motion that is no gesture.
 """
 
 import os
@@ -39,6 +46,9 @@ class TrainConfig:
     noise_m: float = 0.002
     crop: float = 0.1
     warp: float = 0.3
+    lead_in: float = 0.0
+    reject_share: float = 0.0
+    reject_weight: float = 1.0
     seed: int = 0
     threads: int = 1
 
@@ -63,6 +73,8 @@ def augment(sequence, rng, config):
     seq = (seq - centre) @ _rotation(rng, config.rotate_deg).T
     seq = seq * (1.0 + rng.uniform(-config.scale, config.scale)) + centre
     seq = seq + rng.normal(0.0, config.noise_m, seq.shape)
+    if config.lead_in and rng.uniform() < config.lead_in:
+        seq = np.concatenate([_way_in(seq, rng), seq])
     last = len(seq) - 1
     start = rng.uniform(0.0, config.crop) * last
     end = last - rng.uniform(0.0, config.crop) * last
@@ -70,6 +82,17 @@ def augment(sequence, rng, config):
     bend = rng.uniform(-config.warp, config.warp)
     warped = u + bend * u * (1.0 - u)  # monotonic while |bend| < 1
     return seq, start + warped * (end - start)
+
+
+def _way_in(seq, rng, rate=30.0):
+    """Frames before ``seq``: a rest 2-15 cm away, then a smooth move to its first pose."""
+    direction = rng.normal(size=3)
+    origin = seq[0 if rng.uniform() < 0.5 else -1] + direction / np.linalg.norm(direction) * rng.uniform(0.02, 0.15)
+    rest = np.repeat(origin[None], int(rng.uniform(0.0, 0.3) * rate), axis=0)
+    steps = max(2, int(rng.uniform(0.2, 0.6) * rate))
+    ease = 0.5 - 0.5 * np.cos(np.pi * np.arange(steps) / steps)
+    move = origin + (seq[0] - origin) * ease[:, None, None]
+    return np.concatenate([rest, move]) if len(rest) else move
 
 
 def _torch(config):
@@ -81,8 +104,9 @@ def _torch(config):
     return torch
 
 
-def train_model(dataset, config=None, log=None):
-    """Train a ``SkeletonNet`` on ``dataset`` (a ``SkeletonDataset``); returns it in eval mode."""
+def train_model(dataset, config=None, log=None, negatives=None):
+    """Train a ``SkeletonNet`` on ``dataset`` (a ``SkeletonDataset``), rejecting the windows
+    of ``negatives`` (a ``NegativeSource``, optional); returns it in eval mode."""
     from motion_sensor.gestures.skeleton_network import SkeletonNet
 
     config = config or TrainConfig()
@@ -90,7 +114,8 @@ def train_model(dataset, config=None, log=None):
     rng = np.random.default_rng(config.seed)
     model = SkeletonNet(filters=config.filters)
     optimizer = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay)
-    steps_per_epoch = max(1, int(np.ceil(len(dataset) / config.batch)))
+    n_neg = int(round(config.reject_share * len(dataset))) if negatives else 0
+    steps_per_epoch = max(1, int(np.ceil((len(dataset) + n_neg) / config.batch)))
     scheduler = torch.optim.lr_scheduler.OneCycleLR(
         optimizer, max_lr=config.lr, total_steps=config.epochs * steps_per_epoch, pct_start=0.1
     )
@@ -101,16 +126,23 @@ def train_model(dataset, config=None, log=None):
     inputs = [to_model_frame(s) for s in dataset.sequences]
     for epoch in range(config.epochs):
         model.train()
-        sequences, positions = zip(*(augment(s, rng, config) for s in inputs), strict=True)
+        drawn = [to_model_frame(s) for s in negatives.draw(rng, n_neg)] if n_neg else []
+        sequences, positions = zip(*(augment(s, rng, config) for s in inputs + drawn), strict=True)
         jcd, slow, fast = (torch.as_tensor(a) for a in batch_features(sequences, positions))
-        order = torch.as_tensor(rng.permutation(len(dataset)))
+        order = torch.as_tensor(rng.permutation(len(dataset) + n_neg))
         total = 0.0
         for first in range(0, len(order), config.batch):
             idx = order[first : first + config.batch]
             if len(idx) < 2:  # batch norm needs two samples
                 continue
             out14, out28 = model(jcd[idx], slow[idx], fast[idx])
-            loss = loss_fn(out14, y14[idx]) + loss_fn(out28, y28[idx])
+            pos, neg = idx < len(dataset), idx >= len(dataset)
+            loss = 0.0
+            if pos.any():
+                loss = loss_fn(out14[pos], y14[idx[pos]]) + loss_fn(out28[pos], y28[idx[pos]])
+            if neg.any():  # cross-entropy against the uniform distribution
+                uniform = -out14[neg].log_softmax(1).mean(1) - out28[neg].log_softmax(1).mean(1)
+                loss = loss + config.reject_weight * uniform.sum() / len(idx)
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()

@@ -9,6 +9,11 @@ writes the ONNX model, with a JSON report beside it (``.json``: settings, the es
 the held-out subjects, training time). Nothing is written when a step fails; files are
 replaced atomically.
 
+With ``--reject-share`` above 0 the network also learns to reject motion that is no
+gesture (``skeleton_negatives``): transitions between the training subjects' own gestures,
+and the real Leap recordings given with ``--negatives`` (keep the recordings that measure
+false positives out of this list).
+
 Example (the shipped model)::
 
     train_skeleton_gestures --data ../shared/data/shrec17_train/shrec17_train.npz \\
@@ -25,9 +30,10 @@ import numpy as np
 
 from motion_sensor.errors import MotionSensorError
 from motion_sensor.gestures.skeleton_dataset import load_skeleton_dataset
+from motion_sensor.gestures.skeleton_negatives import NegativeSource, leap_motion
 from motion_sensor.gestures.skeleton_training import TrainConfig, export_onnx, predict, train_model
 
-__all__ = ["subject_folds", "holdout_estimate", "main"]
+__all__ = ["subject_folds", "negatives_for", "holdout_estimate", "main"]
 
 
 def log(message):
@@ -39,10 +45,18 @@ def subject_folds(subjects, folds):
     return {int(s): i % folds for i, s in enumerate(sorted({int(s) for s in subjects}))}
 
 
-def holdout_estimate(dataset, config, folds, eval_folds, log=None, fold_models=None):
+def negatives_for(dataset, config, runs):
+    """The ``NegativeSource`` of a training set (None when rejection is off)."""
+    if config.reject_share <= 0.0:
+        return None
+    return NegativeSource(runs, dataset.sequences, dataset.subject)
+
+
+def holdout_estimate(dataset, config, folds, eval_folds, log=None, fold_models=None, runs=()):
     """Pooled accuracy (14 and 28 classes) over the held-out groups, and the details;
     with ``fold_models`` (a folder) each fold's model is exported there as
-    ``fold<k>.onnx`` (the spotting benchmark runs it on its held-out subjects)."""
+    ``fold<k>.onnx`` (the spotting benchmark runs it on its held-out subjects). ``runs``:
+    real non-gesture motion (``skeleton_negatives.leap_motion``) when rejection is on."""
     groups = subject_folds(dataset.subject, folds)
     group_of = np.array([groups[int(s)] for s in dataset.subject])
     right14 = right28 = count = 0
@@ -52,7 +66,8 @@ def holdout_estimate(dataset, config, folds, eval_folds, log=None, fold_models=N
         if not test.any():
             raise MotionSensorError(f"fold {fold} of {folds} holds no subject")
         started = time.monotonic()
-        model = train_model(dataset.subset(~test), config, log)
+        train = dataset.subset(~test)
+        model = train_model(train, config, log, negatives_for(train, config, runs))
         held = dataset.subset(test)
         prob14, prob28 = predict(model, held.sequences)
         ok14 = int(np.sum(prob14.argmax(1) == held.label14))
@@ -90,6 +105,13 @@ def parse_args(argv=None):
         "--eval-folds", type=int, nargs="*", default=[], help="groups held out one at a time for the estimate"
     )
     parser.add_argument("--fold-models", metavar="DIR", help="also export each held-out fold's model here")
+    parser.add_argument(
+        "--negatives",
+        nargs="*",
+        default=[],
+        metavar="RECORDING",
+        help="Leap v6 recordings (.jsonl.gz) of motion that is no gesture, rejected when --reject-share > 0",
+    )
     defaults = TrainConfig()
     for name, value in defaults.as_dict().items():
         parser.add_argument(f"--{name.replace('_', '-')}", type=type(value), default=value, help="(%(default)s)")
@@ -107,15 +129,22 @@ def main(argv=None):
     except MotionSensorError as exc:
         log(str(exc))
         return 2
+    try:
+        runs = leap_motion(args.negatives) if config.reject_share > 0.0 else []
+    except MotionSensorError as exc:
+        log(str(exc))
+        return 2
     log(f"{len(dataset)} sequences, {len(set(dataset.subject.tolist()))} subjects; settings {config.as_dict()}")
     report = {"data": os.path.basename(args.data), "config": config.as_dict(), "folds": args.folds}
+    if runs:
+        report["negatives"] = sorted(os.path.basename(p) for p in args.negatives)
     if args.eval_folds:
-        estimate, details = holdout_estimate(dataset, config, args.folds, args.eval_folds, log, args.fold_models)
+        estimate, details = holdout_estimate(dataset, config, args.folds, args.eval_folds, log, args.fold_models, runs)
         report.update(estimate=estimate, held_out=details)
         log(f"user-independent estimate: {estimate}")
     if args.out:
         started = time.monotonic()
-        model = train_model(dataset, config, log)
+        model = train_model(dataset, config, log, negatives_for(dataset, config, runs))
         report["final_train_s"] = round(time.monotonic() - started, 1)
         report["parameters"] = int(sum(p.numel() for p in model.parameters()))
         export_onnx(model, args.out, {"config": json.dumps(config.as_dict()), "trained_on": args.data})
