@@ -3,7 +3,16 @@
 1. Sanity: an image that is not an H x W x 3 uint8 array, is empty or is blank (no contrast)
    is rejected as a whole ("corrupt image").
 2. Foreground: inside the belt's image region (``belt_mask``), pixels that differ from the
-   dark belt: bright (V) or saturated (S) in HSV.
+   dark belt: bright (V) or saturated (S) in HSV. The brightness threshold follows the
+   exposure (``belt_value``): a camera's gain, offset and gamma, and the lighting, move the
+   belt's and the parts' levels together, so the threshold is set from the belt's median
+   V in this image B: ``B + (value_min - belt_value) * (B / belt_value) ** 0.75``, at least
+   ``value_margin_min`` above B (exactly ``value_min`` at the nominal exposure). The
+   exponent sits between a pure gain (1: the margin scales with the belt) and a pure
+   offset (0: it does not): over the cell's perturbation ranges (light x0.7-1.2, gain
+   0.8-1.2, offset -12..12, gamma 0.85-1.2) the belt reads 5-95 and a silver part's
+   darkest face 44-205, and the threshold stays between them. Yellow needs V above the
+   same threshold scaled by 60/95 (a dark, saturated belt pixel is not yellow).
 3. Blobs: external contours with their holes (``RETR_CCOMP``). A blob within ``edge_px`` of
    the image border or of the belt region's border is rejected ("edge": only part of it is
    seen, or it lies on the belt's edge).
@@ -71,7 +80,23 @@ from .parts import BOLT_HEAD, BOLT_SHAFT, PART_CLASSES
 
 DETECTOR_SCHEMA = ParamSchema(
     [
-        Param("value_min", 95, "0-255", "V above which a grey pixel is foreground (silver)", low=0, high=255),
+        Param(
+            "value_min",
+            95,
+            "0-255",
+            "V above which a grey pixel is foreground (silver), at belt_value",
+            low=0,
+            high=255,
+        ),
+        Param(
+            "belt_value",
+            46,
+            "0-255",
+            "the belt's V at the nominal exposure: value_min follows the belt's level in each image (0: fixed)",
+            low=0,
+            high=255,
+        ),
+        Param("value_margin_min", 12, "0-255", "least V above the belt's that is foreground", low=1, high=255),
         Param("saturation_min", 90, "0-255", "S above which a pixel is coloured", low=0, high=255),
         Param("hue_yellow", [12.0, 40.0], "OpenCV hue 0-180", "yellow hue range", length=2, low=0.0, high=180.0),
         Param("min_area_px", 25, "px", "smaller blobs are noise", low=1, high=100000),
@@ -262,6 +287,7 @@ class ClassicalDetector(PartDetector):
     ):
         super().__init__(belt_mask)
         self.params = DETECTOR_SCHEMA.validate(params or {}, "detector")
+        self.last_value_threshold = float(self.params["value_min"])  # of the last image (diagnostics)
         self.to_plane = to_plane or (lambda px: np.asarray(px, float) * mm_per_px / 1000.0)
 
     def _detect(self, image, result):
@@ -269,9 +295,6 @@ class ClassicalDetector(PartDetector):
         h, w = image.shape[:2]
         hsv = cv2.cvtColor(image, cv2.COLOR_RGB2HSV)
         hue, sat, val = hsv[:, :, 0], hsv[:, :, 1], hsv[:, :, 2]
-        yellow = (sat >= P["saturation_min"]) & (hue >= P["hue_yellow"][0]) & (hue <= P["hue_yellow"][1]) & (val >= 60)
-        silver = (sat < P["saturation_min"] * 0.5) & (val >= P["value_min"])
-        foreground = (val >= P["value_min"]) | (sat >= P["saturation_min"])
         region = np.full((h, w), 255, np.uint8) if self.belt_mask is None else self.belt_mask
         visible = region > 0
         near_arm = None
@@ -280,6 +303,12 @@ class ClassicalDetector(PartDetector):
             visible &= self.occluded == 0
             size = 2 * edge + 1
             near_arm = cv2.dilate(self.occluded, np.ones((size, size), np.uint8))
+        value_min = self.value_threshold(val, visible)
+        bright = val >= value_min
+        coloured = (sat >= P["saturation_min"]) & (val >= value_min * (60.0 / 95.0))
+        yellow = coloured & (hue >= P["hue_yellow"][0]) & (hue <= P["hue_yellow"][1])
+        silver = (sat < P["saturation_min"] * 0.5) & bright
+        foreground = bright | coloured
         mask = np.where(foreground & visible, 255, 0).astype(np.uint8)
         # Edge zone: the image border and the belt region's border.
         inner = self.belt_inner((h, w), edge)
@@ -308,6 +337,20 @@ class ClassicalDetector(PartDetector):
                 holes.append(contours[child])
                 child = hierarchy[child][0]
             self._classify(contour, holes, centroid, yellow, silver, result)
+
+    def value_threshold(self, val: np.ndarray, visible: np.ndarray) -> float:
+        """The V threshold of this image (module docstring, 2.)."""
+        P = self.params
+        nominal = P["belt_value"]
+        if not nominal:
+            return float(P["value_min"])
+        sample = val[visible][::7]  # the belt, a few parts: the median is the belt's
+        if sample.size < 100:
+            return float(P["value_min"])
+        belt = float(np.median(sample))
+        threshold = belt + (P["value_min"] - nominal) * (max(belt, 1.0) / nominal) ** 0.75
+        self.last_value_threshold = max(threshold, belt + P["value_margin_min"])
+        return self.last_value_threshold
 
     def _classify(self, contour, holes, centroid, yellow, silver, result):
         P = self.params

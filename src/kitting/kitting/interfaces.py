@@ -60,9 +60,10 @@ _CELL_SIM_PARAMS = ParamSchema(
             "exposure_time",
             0.01,
             "s",
-            "exposure of each image: the belt's parts are smeared over exposure x belt speed (0: sharp)",
+            "exposure of each image: the belt's parts are smeared over exposure x belt speed (0: sharp; "
+            "a moving-belt camera keeps it short: 30 ms is 2 px at 0.065 m/s)",
             low=0.0,
-            high=0.1,
+            high=0.03,
         ),
         Param("exposure_drift", False, "", "vary gain, offset and gamma per image within their ranges (seeded)"),
         Param("gain_range", [0.8, 1.2], "", "exposure gain range of exposure_drift", length=2, low=0.1, high=4.0),
