@@ -45,6 +45,7 @@ from bench_common import RESULTS, write_results
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src", "motion_commander"))
 from motion_commander.lag_estimate import MIN_SPAN_M, trailing_lag  # noqa: E402
+from motion_commander.session_report import overshoot  # noqa: E402
 from motion_common.launch_args import declared_args  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
@@ -85,12 +86,15 @@ def engaged_span(streams):
 
 def stage_lags(streams, min_span=MIN_SPAN_M):
     """Lag (ms) of each stage and end to end (lag_estimate.trailing_lag: None where it
-    cannot be told)."""
+    cannot be told), and how far the measured tool went past the core target's turning
+    points (``overshoot_mm``, as the session summary gives it)."""
     streams = engaged_span(streams)
-    return {
+    lags = {
         f"{source}->{follower}": trailing_lag(streams[source], streams[follower], min_span)
         for source, follower in STAGES
     }
+    lags["overshoot_mm"] = round(overshoot(streams["target"], streams["tool"]) * 1000.0, 2)
+    return lags
 
 
 def record(out_path):
@@ -148,6 +152,18 @@ def ur_args(lookahead, workdir):
     return ["real_robot:=true", "fake_controller:=true", f"driver_params:={params}"]
 
 
+def wait_for_master(uri, launch, timeout=60.0):
+    """Until the session's roscore answers, so that the recorder registers at once (rospy
+    prints a warning per retry otherwise)."""
+    import rosgraph
+
+    deadline = time.monotonic() + timeout
+    while not rosgraph.is_master_online(uri):
+        if launch.poll() is not None or time.monotonic() > deadline:
+            raise SystemExit(f"hand_to_tool: no roscore at {uri} (roslaunch exit code {launch.poll()})")
+        time.sleep(0.1)
+
+
 def run_session(recording, filter_args, workdir):
     """One session recorded; the five streams as arrays of rows (t, x, y, z)."""
     env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{PORT}", ROS_HOME=workdir)
@@ -169,6 +185,7 @@ def run_session(recording, filter_args, workdir):
         stderr=subprocess.DEVNULL,
     )
     try:
+        wait_for_master(env["ROS_MASTER_URI"], launch)
         subprocess.run([sys.executable, os.path.abspath(__file__), "--record", out], env=env, timeout=360, check=True)
     finally:
         launch.send_signal(signal.SIGINT)
@@ -254,7 +271,11 @@ def main():
             results.setdefault("stage_ms_p50", {}).setdefault(filter_name, {})[stage] = p50(
                 per[n][filter_name].get(stage) for n in per
             )
+    for filter_name in args.filters:
+        values = [per[n][filter_name].get("overshoot_mm") for n in per]
+        results[f"{filter_name}_overshoot_mm_max"] = max((v for v in values if v is not None), default=None)
     results["hand_to_tool_ms_p50"] = results.get(f"{DEFAULT_FILTER}_hand_to_tool_ms_p50")
+    results["overshoot_mm_max"] = results.get(f"{DEFAULT_FILTER}_overshoot_mm_max")
     if ur:
         results["ur_path"] = {
             "filter": DEFAULT_FILTER,
@@ -262,9 +283,10 @@ def main():
             "recordings": ur,
             "hand_to_tool_ms_p50": {k: p50(v[n].get("raw->tool") for n in v) for k, v in ur.items()},
             "commanded_to_tool_ms_p50": {k: p50(v[n].get("commanded->tool") for n in v) for k, v in ur.items()},
+            "overshoot_mm_max": {k: max(v[n].get("overshoot_mm", 0.0) for n in v) for k, v in ur.items()},
         }
     write_results("hand_to_tool", results, show=False)
-    print(json.dumps({k: v for k, v in results.items() if k.endswith("p50")}, indent=2))
+    print(json.dumps({k: v for k, v in results.items() if k.endswith(("p50", "_max"))}, indent=2))
     if ur:
         print("UR path, hand -> tool p50 by lookahead (s):", results["ur_path"]["hand_to_tool_ms_p50"])
 

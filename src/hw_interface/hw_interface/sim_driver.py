@@ -193,7 +193,13 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._target = self._initial.copy()
         self.stream_acceleration = float(stream_acceleration)
         self.stream_timeout = float(stream_timeout)
-        self._follower = StreamFollower(self.kinematics.velocity_limits, self._initial, self.stream_acceleration)
+        # The streamed setpoint moves no faster than the motors can follow: a setpoint that
+        # outran a capped motor (a wrist at its limit) left it behind, and the tool, off the
+        # commanded path by up to 7 mm, went 2-3 mm past the hand's turning points as the
+        # motors caught up.
+        self._follower = StreamFollower(
+            self.kinematics.velocity_limits * MOTOR_SPEED_FRACTION, self._initial, self.stream_acceleration
+        )
         # Simulated time of the last SET_JOINTS (None: no stream): the stream watchdog.
         self._last_stream: float | None = None
         self.stream_timeouts = 0

@@ -435,7 +435,10 @@ class TeleopCore:
         goal = joints
         self.limiter.observe_target(goal, dt)
         overshoot = self.limiter.overshoot(self._command, joints, dt, speed)
-        partial = 1.0 < overshoot < float("inf")
+        # Also when some joint may not move toward its goal at all (overshoot infinite: its
+        # target is already coming back): the position step is still taken, and only what
+        # cannot move waits, instead of the whole arm standing still and lurching after.
+        partial = overshoot > 1.0
         if partial:
             joints, stop, ratio = self._limited_step(target_position, target_rotation, overshoot, goal, dt, speed)
             joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=stop, ratio=ratio)
