@@ -3,6 +3,7 @@
 over seeded random part placements.
 
     bench/run kitting_vision_bench [--images N] [--seed S] [--parts-per-image K] [--worker-frames F]
+                                   [--exposure-time T]
 
 Per image, K parts of random classes are placed at random, separated positions and yaws
 on the belt in the camera's view; the cell's camera renders it at 640x480 (TinyRenderer,
@@ -11,6 +12,15 @@ to the nearest true part. The camera pose used for pixel->belt is the one calibr
 the cell's ArUco markers (one supersampled image), as the vision node will do; the pose
 error with the true camera is reported alongside. Also: ChArUco intrinsics on rendered
 board views, and the render round trip through the separate render process.
+
+"realistic": the same placements again as the simulated cell's camera now draws them: the
+arm (none, at its wait position, or coming down on one of the parts at a random height),
+the belt's parts blurred over the exposure time (``--exposure-time``, default the cell
+camera's declared one) at a belt speed drawn as the campaign perturbs it (x 0.7-1.3), the
+lighting (x 0.7-1.2) and the exposure's gain, offset and gamma drawn from their declared
+ranges; the vision masks the arm from its joints. Reported: render cost, detection rate
+of the parts the arm does not cover, confusions, pose error, and detections that are no
+part (the arm seen as a part).
 Prints p50/p99 timings, accuracy, pose-error percentiles, rejections and every part that
 was missed or confused (with the detector's reason). Writes
 bench/results/kitting_vision_bench.json (seed 1) or kitting_vision_bench_seed<S>.json.
@@ -33,12 +43,16 @@ import pybullet as p  # noqa: E402
 
 from bench_common import write_results  # noqa: E402
 from kitting.calibration import BoardSpec, calibrate_intrinsics, extrinsics_from_marker, pose_error  # noqa: E402
-from kitting.camera import PinholeCamera, render  # noqa: E402
+from kitting.camera import Lighting, PinholeCamera, render  # noqa: E402
+from kitting.camera_effects import Exposure  # noqa: E402
 from kitting.cell import load_cell  # noqa: E402
-from kitting.parts import CLASS_NAMES  # noqa: E402
-from kitting.render_worker import RenderWorker  # noqa: E402
+from kitting.interfaces import KITTING_CELL_SIM  # noqa: E402
+from kitting.parts import CLASS_NAMES, PART_CLASSES  # noqa: E402
+from kitting.render_worker import RenderWorker, _realistic, _RobotBody  # noqa: E402
+from kitting.robot_silhouette import RobotSilhouette, robot_urdf  # noqa: E402
 from kitting.sim_scene import SimScene, render_board_views  # noqa: E402
 from kitting.vision import BeltVision  # noqa: E402
+from motion_common.kinematics import RobotKinematics, pose_to_se3  # noqa: E402
 
 
 def pct(values, q):
@@ -55,6 +69,36 @@ def placements(rng, cell, count, view):
         if all(math.hypot(x - a, y - b) > 0.06 for a, b in chosen):
             chosen.append((x, y))
     return chosen
+
+
+WAIT = [-0.20, 0.55, 0.35]  # m, the kitting node's wait position (config/kitting.yaml)
+HOME = np.array([0.0, -1.5707963, 1.5707963, -1.5707963, -1.5707963, 0.0])
+
+
+class Arm:
+    """The cell's robot: joints for a tool position (tool z down) and its image mask."""
+
+    def __init__(self, cell):
+        self.cell = cell
+        self.kinematics = RobotKinematics(robot_urdf(cell.robot))
+        self.names = [self.kinematics.model.names[j] for j in range(1, self.kinematics.model.njoints)]
+        self.silhouette = RobotSilhouette(robot_urdf(cell.robot), cell.gripper.tcp_length)
+
+    def joints(self, tool):
+        result = self.kinematics.solve_ik(pose_to_se3(tool, [1.0, 0.0, 0.0, 0.0]), HOME, max_iterations=300)
+        return (self.names, list(result.joints)) if result.success else None
+
+    def random_pose(self, rng, truth):
+        """None (no arm in view), the wait position, or the magnet over one of the parts."""
+        draw = rng.uniform()
+        if draw < 0.25:
+            return None
+        if draw < 0.5:
+            return self.joints(WAIT)
+        name, x, y, _ = truth[int(rng.integers(len(truth)))]
+        gap = rng.uniform(0.002, 0.08)
+        top = self.cell.belt.height + PART_CLASSES[name].height
+        return self.joints([x, y, top + gap + self.cell.gripper.tcp_length])
 
 
 def charuco(client):
@@ -74,6 +118,64 @@ def charuco(client):
     }
 
 
+def realistic(real, rng, args, cell, client, scene, robot, arm, true_camera, vision, truth):
+    """The image of ``truth`` as the cell's camera draws it now (module docstring), through
+    the vision with the arm masked; statistics added to ``real``."""
+    declared = KITTING_CELL_SIM.params
+    joints = arm.random_pose(rng, truth)
+    robot.pose(joints)
+    level = rng.uniform(0.7, 1.2)
+    base = Lighting()
+    lighting = Lighting(base.direction, base.color, base.ambient * level, base.diffuse * level, base.specular)
+    exposure = Exposure(
+        *(float(rng.uniform(*declared.default(name))) for name in ("gain_range", "offset_range", "gamma_range"))
+    )
+    blur = (args.exposure_time, cell.belt.speed * rng.uniform(0.7, 1.3))
+    start = time.perf_counter()
+    image = _realistic(client, scene, cell, true_camera, lighting, 1, blur, exposure)
+    real["render_ms"].append(1000 * (time.perf_counter() - start))
+    robot.pose(None)  # the plain images have no arm
+    start = time.perf_counter()
+    q = None if joints is None else arm.silhouette.configuration(*joints)
+    margin = 6.0  # the vision pipeline's declared robot_mask_margin_px
+    vision.detector.occluded = None if q is None else arm.silhouette.mask(vision.camera, q, margin)
+    observations, result = vision.observe(image)
+    real["detect_ms"].append(1000 * (time.perf_counter() - start))
+    vision.detector.occluded = None
+    covered = np.zeros((true_camera.height, true_camera.width), bool)
+    if q is not None:
+        covered = arm.silhouette.mask(true_camera, q) > 0
+        real["arm_in_view"] += bool(covered.any())
+    for rejection in result.rejections:
+        real["rejections"][rejection.reason] = real["rejections"].get(rejection.reason, 0) + 1
+    for obs in observations:
+        name, x, y, _ = min(truth, key=lambda t: math.hypot(t[1] - obs.x, t[2] - obs.y))
+        error = 1000 * math.hypot(x - obs.x, y - obs.y)
+        if error > 15:
+            real["not_a_part"] += 1  # e.g. the arm seen as a part
+            continue
+        pixel = np.round(true_camera.project([[x, y, cell.belt.height]])[0]).astype(int)
+        inside = 0 <= pixel[0] < true_camera.width and 0 <= pixel[1] < true_camera.height
+        if inside and covered[pixel[1], pixel[0]]:
+            real["hidden_seen"] += 1
+        real["correct"] += obs.class_name == name
+        real["errors"].append(error)
+    for name, x, y, _ in truth:
+        # A part counts as visible when no pixel of its bounding circle is under the arm.
+        centre = true_camera.project([[x, y, cell.belt.height]])[0]
+        distance = true_camera.pose[2, 3] - cell.belt.height
+        radius = 1.2 * PART_CLASSES[name].length / 2 * true_camera.fx / distance
+        ys, xs = np.ogrid[: true_camera.height, : true_camera.width]
+        near = (xs - centre[0]) ** 2 + (ys - centre[1]) ** 2 <= radius**2
+        if np.any(near & covered):
+            real["hidden"] += 1
+            continue
+        real["visible"] += 1
+        real["detected"] += any(
+            o.class_name == name and 1000 * math.hypot(x - o.x, y - o.y) <= 15 for o in observations
+        )
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--images", type=int, default=120, help="rendered images (default 120)")
@@ -86,6 +188,13 @@ def main():
         "names the result file kitting_vision_bench_seed<S>.json)",
     )
     parser.add_argument("--worker-frames", type=int, default=20, help="frames through the render process (default 20)")
+    declared = KITTING_CELL_SIM.params
+    parser.add_argument(
+        "--exposure-time",
+        type=float,
+        default=declared.default("exposure_time"),
+        help="exposure time of the realistic images (s; default the cell camera's, %(default)s)",
+    )
     args = parser.parse_args()
 
     cell = load_cell()
@@ -110,6 +219,12 @@ def main():
     per_class = {name: {"placed": 0, "detected": 0, "correct": 0, "errors_mm": []} for name in CLASS_NAMES}
     confusion = {name: {} for name in CLASS_NAMES}
     rejections, misses = {}, []
+    arm = Arm(cell)
+    robot = _RobotBody(client, cell)
+    robot.pose(None)
+    real = {"render_ms": [], "detect_ms": [], "errors": [], "visible": 0, "detected": 0, "correct": 0}
+    real.update({"hidden": 0, "hidden_seen": 0, "not_a_part": 0, "rejections": {}, "arm_in_view": 0})
+    real_rng = np.random.default_rng(args.seed + 1000)
     for image_index in range(args.images):
         for part_id in list(scene.parts):
             scene.remove_part(part_id)
@@ -173,6 +288,8 @@ def main():
                     else [nearest.class_name, round(1000 * math.hypot(x - nearest.x, y - nearest.y), 1)],
                 }
             )
+        realistic(real, real_rng, args, cell, client, scene, robot, arm, true_camera, vision, truth)
+    robot.pose(None)
 
     worker_ms = []
     with RenderWorker() as worker:
@@ -192,6 +309,27 @@ def main():
             "pose_error_mm_p95": pct(stats["errors_mm"], 95),
         }
     placed = sum(s["placed"] for s in per_class.values())
+    seen = max(len(real["errors"]), 1)
+    realistic_results = {
+        "exposure_time_s": args.exposure_time,
+        "render_ms_p50": pct(real["render_ms"], 50),
+        "render_ms_p99": pct(real["render_ms"], 99),
+        "render_ms_ratio_p50": round(pct(real["render_ms"], 50) / pct(render_ms, 50), 3),
+        "detector_ms_p50": pct(real["detect_ms"], 50),
+        "detector_ms_p99": pct(real["detect_ms"], 99),
+        "images_with_arm_in_view": real["arm_in_view"],
+        "parts_visible": real["visible"],
+        "parts_under_the_arm": real["hidden"],
+        "detection_rate_visible": round(real["detected"] / max(real["visible"], 1), 4),
+        "classification_accuracy_seen": round(real["correct"] / seen, 4),
+        "detections_of_no_part": real["not_a_part"],
+        "detections_of_parts_under_the_arm": real["hidden_seen"],
+        "pose_error_mm_p50": pct(real["errors"], 50),
+        "pose_error_mm_p95": pct(real["errors"], 95),
+        "pose_error_mm_p99": pct(real["errors"], 99),
+        "pose_error_mm_max": pct(real["errors"], 100),
+        "rejections": real["rejections"],
+    }
     results = {
         "images": args.images,
         "parts_per_image": args.parts_per_image,
@@ -223,6 +361,7 @@ def main():
         "confusion": confusion,
         "confusions": sum(n for name, row in confusion.items() for other, n in row.items() if other != name),
         "misses": misses,
+        "realistic": realistic_results,
     }
     write_results(
         "kitting_vision_bench" if args.seed == 1 else f"kitting_vision_bench_seed{args.seed}", results, show=False
@@ -247,6 +386,16 @@ def main():
         f"ChArUco focal error {intrinsics['focal_error_pct']} %, reprojection {intrinsics['reprojection_rms_px']} px; "
         f"marker extrinsics {results['marker_extrinsics']['position_error_mm']} mm / "
         f"{results['marker_extrinsics']['rotation_error_deg']} deg"
+    )
+    r = realistic_results
+    print(
+        f"realistic (arm, blur {1000 * args.exposure_time:g} ms exposure, exposure drift): render p50 "
+        f"{r['render_ms_p50']} ms (x{r['render_ms_ratio_p50']}), detector p50 {r['detector_ms_p50']} ms; "
+        f"arm in view in {r['images_with_arm_in_view']} images; visible parts detected "
+        f"{100 * r['detection_rate_visible']:.2f} % of {r['parts_visible']} ({r['parts_under_the_arm']} under the "
+        f"arm); accuracy {100 * r['classification_accuracy_seen']:.2f} %; detections of no part "
+        f"{r['detections_of_no_part']}; pose error p50/p95/p99/max {r['pose_error_mm_p50']}/"
+        f"{r['pose_error_mm_p95']}/{r['pose_error_mm_p99']}/{r['pose_error_mm_max']} mm; rejections {r['rejections']}"
     )
     for miss in misses:
         print(
