@@ -20,7 +20,7 @@ from .access import HostOriginGuard, token_accepted
 from .application import panels_for
 from .controls import control_states
 from .episodes import episode_rows, episode_status_text
-from .readings import device_label, image_data_url
+from .readings import device_label, image_data_url, kit_score_text
 from .status_style import STATUS_COLOURS, status_view
 
 __all__ = ["DashboardPage", "serve"]
@@ -579,10 +579,12 @@ class DashboardPage:
         if values.get("campaign_result"):
             result = values["campaign_result"]
             status = (
-                f"done: {result.get('successes', '?')}/{result.get('trials', '?')} placed"
+                f"done: {result.get('successes', '?')}/{result.get('trials', '?')} placed{kit_score_text(result)}"
                 if "error" not in result
                 else f"error: {result['error']}"
             )
+        elif progress and kit_score_text(progress):
+            status = f"{status}{kit_score_text(progress)}"
         self.campaign_label.set_text(status)
         if progress and "per_class" in progress:
             rows = [

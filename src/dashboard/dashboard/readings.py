@@ -129,9 +129,24 @@ def campaign_line(key: str, data: dict) -> str:
     per_class = data.get("per_class") or {}
     picked = sum(int(row.get("picked", 0)) for row in per_class.values() if isinstance(row, dict))
     placed = sum(int(row.get("placed", 0)) for row in per_class.values() if isinstance(row, dict))
+    kits = kit_score_text(data)
     if key == "campaign_result":
-        return f"campaign done: {data.get('successes', placed)}/{data.get('trials', '?')} placed"
-    return f"trial {data.get('done', '?')}/{data.get('trials', '?')} done: {picked} picked, {placed} placed so far"
+        return f"campaign done: {data.get('successes', placed)}/{data.get('trials', '?')} placed" + kits
+    return (
+        f"trial {data.get('done', '?')}/{data.get('trials', '?')} done: {picked} picked, {placed} placed so far" + kits
+    )
+
+
+def kit_score_text(data: dict) -> str:
+    """', kit score S/M (P %) over K kit(s)' (ARIAC's kitting score of the trays swapped so
+    far), or '' before the first kit is scored."""
+    try:
+        kits, score, best = int(data["kits"]), float(data["kit_score"]), float(data["kit_score_max"])
+    except (KeyError, TypeError, ValueError):
+        return ""
+    if kits <= 0 or best <= 0:
+        return ""
+    return f", kit score {score:g}/{best:g} ({100 * score / best:.0f} %) over {kits} kit(s)"
 
 
 def kitting_event_line(event: str, class_name: str, track_id: int, reason: str = "") -> str:

@@ -68,6 +68,14 @@ def test_campaign_and_kitting_event_lines():
     assert campaign_line("campaign_progress", progress) == "trial 2/6 done: 2 picked, 1 placed so far"
     assert campaign_line("campaign_result", {"successes": 5, "trials": 6}) == "campaign done: 5/6 placed"
     assert campaign_line("campaign_result", {"error": "boom"}) == "campaign error: boom"
+    # The kits scored so far (ARIAC's kitting score) follow the placed count.
+    kits = {"kits": 2, "kit_score": 30, "kit_score_max": 36}
+    assert campaign_line("campaign_result", {"successes": 12, "trials": 12, **kits}) == (
+        "campaign done: 12/12 placed, kit score 30/36 (83 %) over 2 kit(s)"
+    )
+    assert campaign_line("campaign_progress", {**progress, "kits": 0, "kit_score": 0, "kit_score_max": 0}) == (
+        "trial 2/6 done: 2 picked, 1 placed so far"
+    )
     assert campaign_line("campaign_progress", []) == "campaign_progress: unreadable"
     assert kitting_event_line("picked", "nut_yellow", 3) == "picked nut_yellow #3"
     assert kitting_event_line("missed", "", 4, "too late") == "missed part #4: too late"
