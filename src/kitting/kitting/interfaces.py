@@ -142,9 +142,9 @@ VISION_NODE = NodeInterface(
                 Param("detector_params", {}, doc="the detector's parameters"),
                 Param(
                     "joint_state_max_age",
-                    0.05,
+                    0.02,
                     "s",
-                    "largest gap between an image's stamp and the joint state that masks the arm in it",
+                    "joint states this close to an image's stamp mask the arm in it (their union; at 100 Hz, 4-5)",
                     low=0.0,
                     high=10.0,
                 ),

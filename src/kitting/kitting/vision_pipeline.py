@@ -18,10 +18,12 @@
 4. Detection (classical colour + shape, or an ONNX model) and the exact ray-plane
    intersection (``kitting.vision.BeltVision``).
 
-The robot arm works between the camera and the belt. Given the robot's joints at the
-image's stamp (``process(..., joints=)``), the pipeline projects the arm and magnet
-(``kitting.robot_silhouette``, grown by ``robot_mask_margin_px`` for the joint sample's
-age) with the held camera pose: a marker the silhouette touches is left out of the
+The robot arm works between the camera and the belt. Given the robot's joint states
+around the image's stamp (``process(..., joints=)``: one (names, positions) or a list),
+the pipeline projects the arm and magnet at each (``kitting.robot_silhouette``, grown by
+``robot_mask_margin_px``) with the held camera pose and masks their union: the arm moves
+during the exposure and the image's stamp and the joint states' are not taken at the same
+instant (at 0.5 m/s near the camera, 10 ms is 10 px). a marker the silhouette touches is left out of the
 registration (step 2 then registers from the others), the covered pixels are never
 foreground, and a part blob that touches them is rejected as "hidden by the arm" (the
 detector module explains why masking beats guessing a half-seen part). Without joints
@@ -149,13 +151,8 @@ class VisionPipeline:
         self.robot_mask: np.ndarray | None = None  # the last image's (uint8, 255 = arm)
 
     # -- registration ------------------------------------------------------------------------
-    def _register(self, image, stamp: float, q=None) -> str:
+    def _register(self, image, stamp: float, occluded=None) -> str:
         """Update the camera pose from the markers; '' or why this image gave none."""
-        occluded = None
-        if q is not None:
-            pose = self.camera_pose if self.camera_pose is not None else self.prior_pose
-            if pose is not None:
-                occluded = self._mask(pose, q)
         found = extrinsics_from_marker(
             image, self.cell.markers, self.camera.K, self.camera.distortion, edge_corners=True, occluded=occluded
         )
@@ -240,13 +237,28 @@ class VisionPipeline:
         self._vision.camera = camera
         self._vision.detector.belt_mask = belt_mask_for(camera, self.cell.belt, self.params["belt_edge_margin"])
 
-    def _mask(self, pose, q) -> np.ndarray:
-        return self.silhouette.mask(self.camera.with_pose(pose), q, self.params["robot_mask_margin_px"])
+    @staticmethod
+    def _moved(before, after) -> bool:
+        """Did the registration move the camera by more than 2 mm or 0.2°?"""
+        if before is None or after is None:
+            return True
+        turn = Rotation.from_matrix(before[:3, :3].T @ after[:3, :3]).magnitude()
+        return bool(np.linalg.norm(after[:3, 3] - before[:3, 3]) > 0.002 or math.degrees(turn) > 0.2)
+
+    def _mask(self, pose, configurations) -> np.ndarray:
+        """Union of the arm's silhouettes at ``configurations`` in the camera at ``pose``."""
+        camera = self.camera.with_pose(pose)
+        mask = None
+        for q in configurations:
+            one = self.silhouette.mask(camera, q, self.params["robot_mask_margin_px"])
+            mask = one if mask is None else np.maximum(mask, one)
+        return mask
 
     # -- per image ---------------------------------------------------------------------------
     def process(self, image_rgb, stamp: float, joints=None) -> VisionResult:
         """Parts in one RGB image taken at ``stamp`` (s); ``joints``: (names, positions) of
-        the robot at ``stamp`` (the arm is masked out), None when unknown."""
+        the robot at ``stamp``, or a list of them around it (the arm is masked out), None
+        when unknown."""
         problem = check_image(image_rgb)
         if not problem and image_rgb.shape[:2] != (self.camera.height, self.camera.width):
             problem = (
@@ -256,16 +268,21 @@ class VisionPipeline:
         if problem:
             self.counts["corrupt image"] += 1
             return VisionResult(False, f"corrupt image: {problem}")
-        q = None
+        configurations = []
         if self.silhouette is not None:
-            if joints is None:
-                self.counts["arm not masked: no joints"] += 1
-            else:
+            samples = [] if joints is None else [joints] if isinstance(joints[0][0], str) else list(joints)
+            for sample in samples:
                 try:
-                    q = self.silhouette.configuration(*joints)
+                    configurations.append(self.silhouette.configuration(*sample))
                 except ValueError:
                     self.counts["arm not masked: joints not the robot's"] += 1
-        why = self._register(cv2.cvtColor(image_rgb, cv2.COLOR_RGB2GRAY), stamp, q)
+            if not samples:
+                self.counts["arm not masked: no joints"] += 1
+        # The held pose (or the calibrated one) places the arm for the markers and the parts:
+        # a registration moves it by a fraction of a pixel, far less than the margin.
+        pose = self.camera_pose if self.camera_pose is not None else self.prior_pose
+        occluded = self._mask(pose, configurations) if configurations and pose is not None else None
+        why = self._register(cv2.cvtColor(image_rgb, cv2.COLOR_RGB2GRAY), stamp, occluded)
         if why:
             self.counts[why] += 1
             self.registration = "held"
@@ -279,7 +296,9 @@ class VisionPipeline:
                     f"{self.params['registration_max_age']:g} s: check the markers are visible",
                     registration="none",
                 )
-        self.robot_mask = None if q is None else self._mask(self.camera_pose, q)
+        if configurations and (occluded is None or self._moved(pose, self.camera_pose)):
+            occluded = self._mask(self.camera_pose, configurations)  # a first or a new registration
+        self.robot_mask = occluded
         self._vision.detector.occluded = self.robot_mask
         observations, detected = self._vision.observe(image_rgb)
         detected: DetectionResult
