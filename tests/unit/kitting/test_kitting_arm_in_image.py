@@ -155,3 +155,23 @@ def test_a_part_under_the_gripper_is_held_not_re_measured(cell, world):
     assert pipeline.counts["hidden by the arm"] >= 3
     world["arm"].pose(None)
     scene.set_part_poses([])
+
+
+def test_the_mask_is_the_union_over_the_joint_states_around_the_stamp(cell, world):
+    """The arm moves during the exposure, and the joint state the image goes with is not
+    known to the millisecond: every sample near the stamp is masked."""
+    camera = PinholeCamera.from_spec(cell.camera)
+    pipeline = _pipeline(cell, camera)
+    world["arm"].pose(None)
+    world["scene"].set_part_poses([])
+    empty = render(world["client"], camera)
+    a = world["joints_at"](_tool_above(cell, -0.35, 0.70, 0.03))
+    b = world["joints_at"](_tool_above(cell, -0.32, 0.70, 0.03))  # 3 cm on, 60 ms at 0.5 m/s
+    pipeline.process(empty, 0.0, a)
+    only_a = pipeline.robot_mask > 0
+    pipeline.process(empty, 0.1, [a, b])
+    both = pipeline.robot_mask > 0
+    pipeline.process(empty, 0.2, b)
+    only_b = pipeline.robot_mask > 0
+    assert np.array_equal(both, only_a | only_b)
+    assert both.sum() > only_a.sum() + 500
