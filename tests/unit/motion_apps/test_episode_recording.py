@@ -41,8 +41,11 @@ def test_wire_round_trip_keeps_dtypes_and_values():
     [
         (b"\x00\x00\x00\x03abc", "not JSON"),
         (b"\xff\xff\xff\xff", "header of"),
-        (_framed(b'{"arrays":[[1]]}'), "not \\[name, bytes\\]"),
-        (_framed(b'{"arrays":[["x",4]]}') + b"abcd", "array 'x'"),
+        (_framed(b'{"arrays":[[1]]}'), "not \\[name, dtype, shape, bytes\\]"),
+        (_framed(b'{"arrays":[["x",4]]}') + b"abcd", "not \\[name, dtype, shape, bytes\\]"),
+        (_framed(b'{"arrays":[["x","<f4",[2],4]]}') + b"abcd", "array 'x': 4 bytes for float32 \\[2\\]"),
+        (_framed(b'{"arrays":[["x","|O",[1],8]]}') + b"abcdefgh", "array 'x': dtype object is not a plain number"),
+        (_framed(b'{"arrays":[["x","zz",[1],1]]}') + b"a", "array 'x': dtype 'zz' is not NumPy's"),
     ],
 )
 def test_wire_rejects_malformed_messages_with_a_reason(blob, reason):
