@@ -8,6 +8,7 @@ import os
 import numpy as np
 import pytest
 
+from motion_common.errors import ParameterError
 from motion_sensor.devices.device import DeviceRunner
 from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording
 from motion_sensor.devices.shrec_stream import ShrecStreamDevice
@@ -188,3 +189,36 @@ def test_webcam_landmarks_give_a_metric_skeleton_where_the_palm_is():
     np.testing.assert_allclose(skeleton[1], pose.position, atol=1e-9)  # the same palm centre
     np.testing.assert_allclose(skeleton[JOINT_NAMES.index("index_tip")], pose.index_tip, atol=1e-9)
     assert skeleton[JOINT_NAMES.index("middle_tip"), 2] > skeleton[0, 2] + 0.05  # fingers up, in metres
+
+
+def test_spotter_classifies_windows_and_takes_the_most_confident():
+    """The whole segment and the segment from ``window_starts`` on go in one batch; the
+    window without the way in wins here, and the event starts where it starts."""
+
+    class Later:
+        def __init__(self):
+            self.batches = []
+
+        def classify_batch(self, sequences):
+            self.batches.append([len(s) for s in sequences])
+            longest = max(len(s) for s in sequences)
+            out = []
+            for seq in sequences:
+                prob = np.full(14, 0.01)
+                prob[1] = 0.3 if len(seq) == longest else 0.9  # tap, sure only without the start
+                out.append(SkeletonResult(prob / prob.sum(), np.full(28, 1 / 28)))
+            return out
+
+    stand_in = Later()
+    spotter = SkeletonSpotter(stand_in, {"window_starts": [0.0, 0.2], "min_confidence": 0.8})
+    events = []
+    for stamp, frame in zip(*_hand_stream(moves=[3.0]), strict=True):
+        events.extend(spotter.update(stamp, frame))
+    assert [e.name for e in events] == ["tap"]
+    assert len(stand_in.batches) == 1 and len(stand_in.batches[0]) == 2
+    whole, later = stand_in.batches[0]
+    assert later < whole
+    segment_start = events[0].info["end"] - (whole - 1) / 30.0
+    assert events[0].info["start"] > segment_start + 0.1  # the later window's start
+    with pytest.raises(ParameterError, match="window_starts"):
+        SkeletonSpotter(stand_in, {"window_starts": [0.95]})

@@ -15,6 +15,8 @@ Its modules:
 - ``skeleton_classifier``: the shipped skeleton model through onnxruntime;
 - ``skeleton_network``: the network in torch (training only);
 - ``skeleton_training``: training, augmentation and ONNX export (torch, training only);
+- ``skeleton_negatives``: motion that is no gesture (real Leap runs, transitions between
+  gestures), which the training teaches the network to reject;
 - ``train_skeleton_gestures``: the training command (user-independent estimate, export);
 - ``skeleton_eval``: ``gesture_eval --skeleton``, the shipped model on a .npz;
 - ``skeleton_spotter``: online spotting of skeleton gestures (motion between two rests);

@@ -11,16 +11,20 @@ last ``rest_window_s`` (the largest RMS excursion of a joint about its mean plac
 relative to the palm, the palm itself; metres, independent of the frame rate) is under
 ``rest_extent_m``. A segment starts when the hand leaves a rest of at least ``pause_s``
 (a command starts from rest: the hand that moves on from teleop motion starts none) and
-ends once it has rested ``pause_s`` again. It is classified (the shipped network through ``classifier``; the whole
-segment and the segment without its first quarter, the hand's way into the gesture: the
-more confident wins) when
+ends once it has rested ``pause_s`` again. The segment usually holds more than the
+gesture: the hand's way from the last rest to where the gesture begins. So several windows
+of it are classified in one batch (the shipped network through ``classifier``), each from a
+fraction ``window_starts`` of the segment to its end, and the most confident window wins;
+a gesture is reported when
 
 - it lasted ``min_duration_s`` to ``max_duration_s`` (longer motion is not a command: the
   spotter then waits for the next rest),
 - its motion extent is at least ``min_extent_m`` (whole SHREC'17 gestures measure 2.3 cm
   and more), and
 - the best gesture's probability is at least ``min_confidence`` and its label is one of
-  ``labels`` (all 14 when empty).
+  ``labels`` (all 14 when empty). The shipped network was trained to answer with no
+  confident class on motion that is no gesture (``skeleton_negatives``), so the gate can
+  stay low.
 
 After a gesture, a segment that starts before its end + ``refractory_s`` is ignored. A
 frame gap longer than ``max_gap_s`` (hand lost) drops the segment. Memory is bounded: the
@@ -46,11 +50,19 @@ SKELETON_SPOTTER_PARAMS = ParamSchema(
         Param("min_duration_s", 0.4, "s", "shorter segments are ignored", low=0.0),
         Param("max_duration_s", 6.0, "s", "longer motion is not a gesture", low=0.0, low_open=True),
         Param("min_extent_m", 0.015, "m", "segments whose motion extent is smaller are ignored", low=0.0),
-        Param("min_confidence", 0.85, "", "a segment's best gesture probability", low=0.0, high=1.0),
+        Param("min_confidence", 0.6, "", "a segment's best gesture probability", low=0.0, high=1.0),
         Param("refractory_s", 0.3, "s", "after a gesture, no new one starts before its end plus this", low=0.0),
         Param("max_gap_s", 0.3, "s", "a longer frame gap drops the segment", low=0.0, low_open=True),
         Param("max_rate_hz", 200.0, "Hz", "bounds the frame history", low=1.0),
         Param("labels", [], "", "gestures that may fire (empty: all 14)", item_kind=str),
+        Param(
+            "window_starts",
+            [0.0, 0.2],
+            "",
+            "fractions of a segment where its classified windows start (each runs to the end)",
+            low=0.0,
+            high=0.9,
+        ),
     ]
 )
 
@@ -156,6 +168,18 @@ class SkeletonSpotter:
         first, last = int(np.searchsorted(stamps, start)), int(np.searchsorted(stamps, end, side="right"))
         return stamps[first:last], np.stack([f[1] for f in list(self._frames)[first:last]]) if last > first else None
 
+    def _windows(self, stamps):
+        """First frame of each window: at the ``window_starts`` fractions of the segment,
+        keeping at least 4 frames and ``min_duration_s`` (duplicates once)."""
+        duration = stamps[-1] - stamps[0]
+        keep = min(self.params["min_duration_s"], duration)
+        firsts = []
+        for fraction in self.params["window_starts"] or [0.0]:
+            first = int(np.searchsorted(stamps, stamps[0] + fraction * duration))
+            if len(stamps) - first >= 4 and stamps[-1] - stamps[first] >= keep and first not in firsts:
+                firsts.append(first)
+        return firsts or [0]
+
     def _decide(self, start, end):
         p = self.params
         self.counters["segments"] += 1
@@ -172,17 +196,17 @@ class SkeletonSpotter:
         if extent < p["min_extent_m"]:
             self.counters["small"] += 1
             return []
-        quarter = int(np.searchsorted(stamps, stamps[0] + 0.25 * (stamps[-1] - stamps[0])))
-        variants = [joints] + ([joints[quarter:]] if len(joints) - quarter >= 4 else [])
-        results = self.classifier.classify_batch(variants)
-        best = max(results, key=lambda r: r.confidence)
+        windows = self._windows(stamps)
+        results = self.classifier.classify_batch([joints[first:] for first in windows])
+        pick = max(range(len(results)), key=lambda k: results[k].confidence)
+        best = results[pick]
         if best.label14 not in self.allowed or best.confidence < p["min_confidence"]:
             self.counters["unsure"] += 1
             return []
         self._blocked_until = float(stamps[-1]) + p["refractory_s"]
         self.counters["gestures"] += 1
         info = {
-            "start": float(stamps[0]),
+            "start": float(stamps[windows[pick]]),
             "end": float(stamps[-1]),
             "label28": best.label28,
             "extent_m": round(extent, 4),
