@@ -6,10 +6,18 @@ The arm first moves (MOVE_J) to the episode's first recorded joints and gripper 
 the joint targets are streamed with SET_JOINTS through the server's own checks (step, lag,
 workspace, latched stop: the same as teleop's stream), and the gripper is set where the
 action changes it. Frame ``i``'s targets go out at ``i / fps``; between two frames the
-targets move linearly from one frame's to the next at ``stream_rate`` (the core commanded at
-the hand's rate, ~110 Hz, and a servo following 10 Hz steps would trail by most of a step).
-Just before frame ``i``'s targets are sent, the measured tool is compared with the tool
-recorded at frame ``i``: both have followed the same targets up to then.
+targets follow a Catmull-Rom curve through the frames' targets at ``stream_rate`` (the core
+commanded at the hand's rate, ~110 Hz, along a curved path: a servo following 10 Hz steps
+trails by most of a step, and straight lines between the frames cut the corners the arm
+took by 1-2 mm at the teach demo's accelerations).
+
+A recorded frame's state is the arm's at the frame's instant, when that frame's command
+was the one in force (``stamped_history``). The replay compares like with like: the tool at
+the moment frame ``i``'s targets are sent against the tool recorded at frame ``i``. With
+``tool_at`` (the moment -> the measured tool position then, from the server's stamped tool
+poses; None while not known yet) the tool is taken at exactly that moment; without it, the
+server is asked (GET_ROBOT_CARTESIAN_POSITION) just before, which is up to a physics step
+and a call off.
 """
 
 import time
@@ -26,6 +34,7 @@ class ReplayReport:
     tool_error_mm: list = field(default_factory=list)
     refused: int = 0
     reason: str = ""
+    unmeasured: int = 0  # frames whose tool pose never came (tool_at)
 
     def summary(self) -> dict:
         errors = np.asarray(self.tool_error_mm, dtype=float)
@@ -37,6 +46,7 @@ class ReplayReport:
             "tool_error_mm_max": float(errors.max()) if errors.size else None,
             "refused": self.refused,
             "reason": self.reason,
+            "unmeasured": self.unmeasured,
         }
 
 
@@ -59,9 +69,21 @@ class EpisodeReplay:
         self.sleep = sleep
         self.settle_s = settle_s
 
-    def run(self, states: np.ndarray, actions: np.ndarray, tool_poses: np.ndarray) -> ReplayReport:
+    @staticmethod
+    def _curve(targets: np.ndarray, i: int, u: float) -> np.ndarray:
+        """Catmull-Rom between frame ``i``'s and ``i + 1``'s targets at ``u`` in [0, 1]; the
+        ends extended in a straight line (a straight path stays straight)."""
+        last = len(targets) - 1
+        p1, p2 = targets[i], targets[min(i + 1, last)]
+        p0 = targets[i - 1] if i > 0 else 2 * p1 - p2
+        p3 = targets[i + 2] if i + 2 <= last else 2 * p2 - p1
+        return 0.5 * (
+            2 * p1 + (p2 - p0) * u + (2 * p0 - 5 * p1 + 4 * p2 - p3) * u * u + (3 * p1 - p0 - 3 * p2 + p3) * u * u * u
+        )
+
+    def run(self, states: np.ndarray, actions: np.ndarray, tool_poses: np.ndarray, tool_at=None) -> ReplayReport:
         """``states`` and ``actions``: joints then gripper per frame; ``tool_poses``: x y z
-        qx qy qz qw per frame, as recorded."""
+        qx qy qz qw per frame, as recorded; ``tool_at``: see the module's docstring."""
         if not (len(states) == len(actions) == len(tool_poses)) or len(states) == 0:
             raise ValueError(
                 f"episode arrays differ in length or are empty: {len(states)}, {len(actions)}, {len(tool_poses)}"
@@ -72,17 +94,21 @@ class EpisodeReplay:
         gripper = bool(states[0, dof] > 0.5)
         self.client.set_gripper(gripper)
         self.sleep(self.settle_s)
+        joints = np.asarray(actions[:, :dof], dtype=np.float64)
+        pending = []  # (frame, moment its targets were sent) not measured yet (tool_at)
         start = self.clock()
         for i, action in enumerate(actions):
             self._wait_until(start + i * self.period)
-            if i > 0:
+            if i > 0 and tool_at is None:
                 position, _ = self.client.get_pose()
                 report.tool_error_mm.append(1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
-            following = actions[i + 1, :dof] if i + 1 < len(actions) else action[:dof]
+            elif i > 0:
+                pending.append((i, self.clock()))
+                pending = self._measure(pending, tool_at, tool_poses, report)
             for k in range(self.substeps if i + 1 < len(actions) else 1):
                 if k:
                     self._wait_until(start + (i + k / self.substeps) * self.period)
-                target = action[:dof] + (following - action[:dof]) * (k / self.substeps)
+                target = self._curve(joints, i, k / self.substeps) if k else joints[i]
                 try:
                     self.client.set_joints([float(v) for v in target])
                 except Exception as exc:  # noqa: BLE001 - the server's refusal ends the replay, reported
@@ -94,7 +120,24 @@ class EpisodeReplay:
                     if closed != gripper:
                         self.client.set_gripper(closed)
                         gripper = closed
+        deadline = self.clock() + 1.0  # the last moments' tool poses are still on their way
+        while pending and self.clock() < deadline:
+            self.sleep(0.02)
+            pending = self._measure(pending, tool_at, tool_poses, report)
+        report.unmeasured = len(pending)
         return report
+
+    @staticmethod
+    def _measure(pending: list, tool_at, tool_poses: np.ndarray, report: ReplayReport) -> list:
+        """Errors of the pending frames whose moment's tool is known; the rest, still pending."""
+        waiting = []
+        for i, moment in pending:
+            position = tool_at(moment)
+            if position is None:
+                waiting.append((i, moment))
+            else:
+                report.tool_error_mm.append(1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
+        return waiting
 
     def _wait_until(self, moment: float) -> None:
         wait = moment - self.clock()

@@ -44,11 +44,14 @@ class FramePacer:
         """How long a stream can stay unread from ``now`` (0 inside a tick's window)."""
         return max(0.0, self.next_tick(now) - self.window - now)
 
-    def hold(self) -> None:
-        """Sleep (in a subscriber's thread) until the next tick's window opens, or stop."""
+    def hold(self, stamp: float | None = None) -> None:
+        """Sleep (in a subscriber's thread) until the next tick's window opens, or stop.
+        With the message's ``stamp`` (this clock), a message from before the last tick does
+        not hold: the thread is reading what waited in its socket since then (it woke late,
+        or the message came late), and the messages after it are wanted too."""
         now = self.clock()
         wait = self.hold_s(now)
-        if wait <= 0:
+        if wait <= 0 or (stamp is not None and stamp < self.next_tick(now) - self.period):
             return
         opens = now + wait
         with self._changed:

@@ -112,3 +112,59 @@ def test_summary_and_picture_of_a_dataset(tmp_path):
     path = plot_episode(str(tmp_path / "episode.png"), episode, 10.0, "test")
     with open(path, "rb") as stream:
         assert stream.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+def test_replay_measures_the_tool_when_each_frames_targets_are_sent():
+    """With the server's stamped tool poses (tool_at), frame i's tool is the arm's at the
+    moment frame i's targets went out, known only once a later pose has come."""
+    states, actions, tools = _episode()
+    arm = _Arm()
+    now = [0.0]
+    log = []  # (time, tool) as the server's stamped poses
+    set_joints = arm.set_joints
+
+    def sent(joints):
+        log.append((now[0], arm.joints.copy()))  # the tool when this target goes out
+        set_joints(joints)
+
+    arm.set_joints = sent
+
+    def tool_at(moment):
+        after = [tool for t, tool in log if t > moment]
+        if not after:
+            return None
+        return [tool for t, tool in log if t <= moment][-1] if any(t <= moment for t, _ in log) else after[0]
+
+    replay = EpisodeReplay(
+        arm, 10.0, stream_rate=10.0, clock=lambda: now[0], sleep=lambda s: now.__setitem__(0, now[0] + s)
+    )
+    report = replay.run(states, actions, tools, tool_at=tool_at)
+    summary = report.summary()
+    assert summary["compared"] + summary["unmeasured"] == 19
+    assert summary["compared"] == 18  # the last frame's moment has no later pose
+    assert summary["tool_error_mm_max"] == pytest.approx(0.0, abs=1e-3)
+
+
+def test_replay_targets_between_frames_follow_the_recorded_curve():
+    """Between two frames the targets follow a curve through the frames' targets, not the
+    chord: on a circle sampled at 10 Hz, mid-way targets stay on it within 0.3 mm where the
+    chord cuts 3 mm inside."""
+    n = 12
+    angle = np.linspace(0, 3.3, n)
+    path = np.stack([0.3 * np.cos(angle), 0.3 * np.sin(angle), np.zeros(n)], axis=1).astype(np.float32)
+    gripper = np.zeros((n, 1), np.float32)
+    states = actions = np.hstack([path, gripper])
+    tools = np.hstack([path, np.tile([0, 0, 0, 1], (n, 1))]).astype(np.float32)
+    arm = _Arm()
+    sent = []
+    arm.set_joints = lambda joints: sent.append(np.array(joints))
+    now = [0.0]
+    replay = EpisodeReplay(
+        arm, 10.0, stream_rate=20.0, clock=lambda: now[0], sleep=lambda s: now.__setitem__(0, now[0] + s)
+    )
+    replay.run(states, actions, tools)
+    middles = np.array(sent[3:-3:2])  # half-way between frames 1-2 ... 9-10 (the ends go straight on)
+    off_circle = 1000 * np.abs(np.linalg.norm(middles[:, :2], axis=1) - 0.3)
+    assert off_circle.max() < 0.3
+    chord = 1000 * (0.3 - np.linalg.norm((path[:-1, :2] + path[1:, :2]) / 2, axis=1))
+    assert chord.min() > 3.0

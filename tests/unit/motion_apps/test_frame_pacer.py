@@ -99,3 +99,15 @@ def test_a_frame_waits_for_a_stream_woken_late_and_no_longer_than_told():
     release.set()
     holder.join()
     assert pacer.caught_up(0.1, timeout=1.0)
+
+
+def test_a_message_from_before_the_last_tick_does_not_hold():
+    """Read late (after the tick), messages stamped before it are read on, so the frame
+    after sees every one of them; the first one stamped after the tick holds."""
+    fake = FakeTime()
+    pacer = FramePacer(0.1, 0.005, clock=fake, start=0.0, event=fake)
+    fake.now = 0.103
+    pacer.hold(stamp=0.097)
+    assert fake.now == 0.103  # not held
+    pacer.hold(stamp=0.101)
+    assert fake.now == pytest.approx(0.195)  # held until tick 0.2's window
