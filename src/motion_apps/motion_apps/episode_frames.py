@@ -21,8 +21,10 @@ LeRobot features (float32 unless said):
   names on purpose: LeRobot's policies take every feature whose name starts with
   ``action`` as an output, and most predict one (``action``).
 
-A frame is made at each tick of the recorder's clock from the newest value of every
-stream, so all frames are ``1 / fps`` apart (LeRobot's timestamps are ``index / fps``). A
+A frame is made at each tick of the recorder's clock from the latest value given for every
+stream, so all frames are ``1 / fps`` apart (LeRobot's timestamps are ``index / fps``); the
+recorder node gives the joints, the tool, the command and the target as they were at the
+frame's instant (``stamped_history``), the rest as their newest message. A
 camera image that is not new since the previous frame is counted as repeated, and a frame
 before the camera's first image (black) as missing (``camera`` counts in the episode's
 record), so a camera slower than ``fps``, or late, shows as a loss.

@@ -104,9 +104,16 @@ class EpisodeRecorder:
         self.frames.reset_counts()
         return True, f"recording episode {self.episode_index} ({reply['task']!r})"
 
-    def tick(self) -> None:
-        """One frame at the recorder's rate (call it every 1/fps s)."""
+    def tick(self, late_s: float = 0.0) -> None:
+        """One frame at the recorder's rate (call it every 1/fps s, with how late this call
+        is, ``late_s``, against its tick). An episode's first frame is not made late by more
+        than a frame: starting waits for the writer (seconds the first time, LeRobot's
+        import), and a tick held up by it would make a first frame of values that old, while
+        the arm moved on (a demo episode's first frame lay 17 cm off its second, and its
+        replay jumped there). The next tick makes it."""
         if not self.recording:
+            return
+        if self.frames.counts.frames == 0 and late_s > 1.0 / self.fps:
             return
         frame = self.frames.sample()
         if frame is not None:

@@ -35,6 +35,12 @@ class ReplayReport:
     refused: int = 0
     reason: str = ""
     unmeasured: int = 0  # frames whose tool pose never came (tool_at)
+    worst_frame: int = -1
+
+    def add(self, frame: int, error_mm: float) -> None:
+        if not self.tool_error_mm or error_mm > max(self.tool_error_mm):
+            self.worst_frame = frame
+        self.tool_error_mm.append(error_mm)
 
     def summary(self) -> dict:
         errors = np.asarray(self.tool_error_mm, dtype=float)
@@ -47,6 +53,7 @@ class ReplayReport:
             "refused": self.refused,
             "reason": self.reason,
             "unmeasured": self.unmeasured,
+            "worst_frame": self.worst_frame,
         }
 
 
@@ -101,7 +108,7 @@ class EpisodeReplay:
             self._wait_until(start + i * self.period)
             if i > 0 and tool_at is None:
                 position, _ = self.client.get_pose()
-                report.tool_error_mm.append(1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
+                report.add(i, 1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
             elif i > 0:
                 pending.append((i, self.clock()))
                 pending = self._measure(pending, tool_at, tool_poses, report)
@@ -136,7 +143,7 @@ class EpisodeReplay:
             if position is None:
                 waiting.append((i, moment))
             else:
-                report.tool_error_mm.append(1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
+                report.add(i, 1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
         return waiting
 
     def _wait_until(self, moment: float) -> None:

@@ -303,6 +303,18 @@ def test_recorder_gesture_toggles_and_long_episodes_are_saved(tmp_path):
     assert save["info"]["frames_sampled"] == 6 and save["info"]["duration_s"] == 0.6
 
 
+def test_first_frame_is_not_one_held_up_by_the_start(tmp_path):
+    """A tick that waited for the start (the writer's import) holds values from before it:
+    they do not make the episode's first frame; later ticks, even late ones, make frames."""
+    recorder, writer, _ = _ready_recorder(tmp_path)
+    recorder.start()
+    recorder.tick(late_s=3.0)  # this tick's values are 3 s old
+    assert writer.frames == 0
+    recorder.tick(late_s=0.002)
+    recorder.tick(late_s=0.5)  # once the episode runs, a late frame is still a frame
+    assert writer.frames == 2
+
+
 def test_recorder_marks_the_episode_in_progress(tmp_path):
     recorder, writer, _ = _ready_recorder(tmp_path)
     recorder.start()
