@@ -23,13 +23,21 @@ def write_results(name: str, results: dict, show: bool = True) -> str:
     return path
 
 
-def teleop_session(port: int, out: str, args, timeout: float = 600.0, what: str = "the session") -> dict:
+def teleop_session(port: int, out: str, args, timeout: float = 600.0, what: str = "the session", watch=None) -> dict:
     """Run launch/teleop_sim.launch on its own master (``port``) with ``args`` (name:=value,
-    output_dir:=``out`` added) until it ends; return its session_summary.json."""
+    output_dir:=``out`` added) until it ends; return its session_summary.json. ``watch``,
+    if given, is called with roslaunch's pid once it runs (e.g. to sample its processes)."""
     env = dict(os.environ, ROS_MASTER_URI=f"http://localhost:{port}")
     launch = os.path.join(ROOT, "src", "motion_bringup", "launch", "teleop_sim.launch")
     cmd = ["roslaunch", "-p", str(port), launch, f"output_dir:={out}", *args]
-    subprocess.run(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=timeout, check=False)
+    with subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) as proc:
+        if watch is not None:
+            watch(proc.pid)
+        try:
+            proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
     path = os.path.join(out, "session_summary.json")
     if not os.path.exists(path):
         raise RuntimeError(f"{what} wrote no summary; run scripts/teleop_sim {' '.join(args)} to see why")
