@@ -48,7 +48,7 @@ from kitting.camera_effects import Exposure  # noqa: E402
 from kitting.cell import load_cell  # noqa: E402
 from kitting.interfaces import KITTING_CELL_SIM  # noqa: E402
 from kitting.parts import CLASS_NAMES, PART_CLASSES  # noqa: E402
-from kitting.render_worker import RenderWorker, _realistic, _RobotBody  # noqa: E402
+from kitting.render_worker import RenderWorker, RobotBody, realistic_image  # noqa: E402
 from kitting.robot_silhouette import RobotSilhouette, robot_urdf  # noqa: E402
 from kitting.sim_scene import SimScene, render_board_views  # noqa: E402
 from kitting.vision import BeltVision  # noqa: E402
@@ -132,7 +132,7 @@ def realistic(real, rng, args, cell, client, scene, robot, arm, true_camera, vis
     )
     blur = (args.exposure_time, cell.belt.speed * rng.uniform(0.7, 1.3))
     start = time.perf_counter()
-    image = _realistic(client, scene, cell, true_camera, lighting, 1, blur, exposure)
+    image = realistic_image(client, scene, cell, true_camera, lighting, 1, blur, exposure)
     real["render_ms"].append(1000 * (time.perf_counter() - start))
     robot.pose(None)  # the plain images have no arm
     start = time.perf_counter()
@@ -220,7 +220,7 @@ def main():
     confusion = {name: {} for name in CLASS_NAMES}
     rejections, misses = {}, []
     arm = Arm(cell)
-    robot = _RobotBody(client, cell)
+    robot = RobotBody(client, cell)
     robot.pose(None)
     real = {"render_ms": [], "detect_ms": [], "errors": [], "visible": 0, "detected": 0, "correct": 0}
     real.update({"hidden": 0, "hidden_seen": 0, "not_a_part": 0, "rejections": {}, "arm_in_view": 0})

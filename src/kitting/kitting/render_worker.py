@@ -22,6 +22,8 @@ from multiprocessing.connection import Client, Listener
 
 import numpy as np
 
+__all__ = ["RenderWorker", "RobotBody", "realistic_image"]
+
 
 def _serve(connection, cell_path, width, height, supersample):
     from motion_common.camera_model import PinholeCamera
@@ -49,16 +51,16 @@ def _serve(connection, cell_path, width, height, supersample):
         stamp, poses, camera_pose, lighting, joints, blur, exposure = message
         scene.set_part_poses(poses)
         if joints is not None and robot is None:
-            robot = _RobotBody(client, cell)
+            robot = RobotBody(client, cell)
         if robot is not None:
             robot.pose(joints)
         view = camera if camera_pose is None else camera.with_pose(camera_pose)
-        image = _realistic(client, scene, cell, view, lighting, supersample, blur, exposure)
+        image = realistic_image(client, scene, cell, view, lighting, supersample, blur, exposure)
         connection.send(("image", stamp, image))
     p.disconnect(client)
 
 
-class _RobotBody:
+class RobotBody:
     """The cell's robot (its URDF's visuals) and the magnet under tool0, in the render client."""
 
     def __init__(self, client, cell):
@@ -108,7 +110,7 @@ class _RobotBody:
             p.resetBasePositionAndOrientation(self.magnet_body, centre, orientation, physicsClientId=c)
 
 
-def _realistic(client, scene, cell, view, lighting, supersample, blur, exposure):
+def realistic_image(client, scene, cell, view, lighting, supersample, blur, exposure):
     """Render ``view``; with ``blur`` = (exposure time s, belt speed m/s) smear the belt's
     parts, with ``exposure`` (camera_effects.Exposure) apply it."""
     from .camera import render

@@ -14,7 +14,7 @@ from kitting.calibration import pose_error
 from kitting.camera import PinholeCamera, render
 from kitting.cell import load_cell
 from kitting.parts import PART_CLASSES
-from kitting.render_worker import _RobotBody
+from kitting.render_worker import RobotBody
 from kitting.robot_silhouette import RobotSilhouette, robot_urdf
 from kitting.sim_scene import SimScene
 from kitting.tracking import BeltTracker, Observation
@@ -37,7 +37,7 @@ def cell():
 def world(cell):
     client = connect(p.DIRECT)
     scene = SimScene(client, cell)
-    arm = _RobotBody(client, cell)
+    arm = RobotBody(client, cell)
     kinematics = RobotKinematics(robot_urdf(cell.robot))
     names = [kinematics.model.names[j] for j in range(1, kinematics.model.njoints)]
     state = {"seed": HOME}
