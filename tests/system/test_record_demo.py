@@ -43,6 +43,9 @@ def test_record_demo_one_episode(tmp_path):
     assert summary["dropped_frames"] == 0
     assert summary["replay"]["compared"] == summary["frames"] - 1, summary["replay"]
     assert summary["replay"]["refused"] == 0
+    # The goal is 2 mm (docs/benchmarks.md); on a loaded machine a frame can miss it by a
+    # little, but a first frame made from values seconds old (tens of mm) must not return.
+    assert summary["replay"]["tool_error_mm_max"] < 10.0, summary["replay"]
     with open(run / "record_demo.png", "rb") as stream:
         assert stream.read(8) == b"\x89PNG\r\n\x1a\n"
     assert "=== recorded dataset ===" in out and "episodes                 : 1" in out
