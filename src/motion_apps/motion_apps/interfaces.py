@@ -199,6 +199,13 @@ REPLAY_EPISODE = NodeInterface(
     "replay_episode",
     "Command-line replay of a recorded episode's actions through the server's safety checks, reporting the "
     "tracking error against the recorded states (anonymous node; arguments on the command line, see --help).",
+    subscribes=(
+        Topic(
+            "motion_controller/tool_pose",
+            _POSE,
+            "the measured tool, stamped: the tool at the moment each frame's targets are sent",
+        ),
+    ),
     calls=(_SERVER,),
 )
 
