@@ -31,7 +31,7 @@ for package in ("motion_common", "motion_apps"):
 
 from motion_apps.dataset_store import DatasetStore  # noqa: E402
 from motion_apps.episode_recorder import read_episode_list  # noqa: E402
-from motion_apps.episode_report import format_summary, plot_episode, summarize_dataset  # noqa: E402
+from motion_apps.episode_report import format_summary, plot_episode, summarize_dataset, velocity_agreement  # noqa: E402
 from motion_apps.lerobot_readback import read_dataset  # noqa: E402
 from motion_common.atomic_file import write_atomic  # noqa: E402
 
@@ -134,6 +134,7 @@ def main(argv=None):
         return 1
     say(f"read back by LeRobot {meta['lerobot_version']} ({meta['video_backend']}): {meta['frames']} frames")
     summary = summarize_dataset(dataset, meta, records)
+    summary["velocity"] = velocity_agreement(episodes[0], meta["fps"])
     if not args.no_replay:
         summary["replay"] = replay(run, dataset, args)
     plot = plot_episode(

@@ -43,6 +43,10 @@ def test_record_demo_one_episode(tmp_path):
     assert summary["dropped_frames"] == 0
     assert summary["replay"]["compared"] == summary["frames"] - 1, summary["replay"]
     assert summary["replay"]["refused"] == 0
+    # Joint velocities are recorded (the drivers' joint_states carry none: they come from the
+    # measured positions) and agree with the recorded positions' own rate.
+    assert summary["velocity"]["moving_frames"] > 10, summary["velocity"]
+    assert 0.7 < summary["velocity"]["gain"] < 1.3, summary["velocity"]
     # The goal is 2 mm (docs/benchmarks.md); on a loaded machine a frame can miss it by a
     # little, but a first frame made from values seconds old (tens of mm) must not return.
     assert summary["replay"]["tool_error_mm_max"] < 10.0, summary["replay"]

@@ -6,7 +6,7 @@ import os
 
 import numpy as np
 
-__all__ = ["dataset_size_bytes", "summarize_dataset", "format_summary", "plot_episode"]
+__all__ = ["dataset_size_bytes", "summarize_dataset", "velocity_agreement", "format_summary", "plot_episode"]
 
 
 def dataset_size_bytes(dataset: str) -> int:
@@ -35,6 +35,30 @@ def summarize_dataset(dataset: str, meta: dict, records: list) -> dict:
         "successes": sum(1 for r in records if r.get("success")),
         "camera_loss_fraction": [r.get("camera_loss_fraction") for r in records],
         "dropped_frames": sum(int(r.get("dropped_frames", 0)) for r in records),
+    }
+
+
+def velocity_agreement(episode: dict, fps: float, moving: float = 0.05) -> dict:
+    """How the recorded joint velocities agree with the rate of the recorded joint
+    positions (central differences at the frame rate), over the frames where some joint
+    moves faster than ``moving`` rad/s: the RMS of each, and the least-squares gain of the
+    velocities on that rate (1: the same; 0: velocities missing)."""
+    state = np.asarray(episode["observation.state"], dtype=float)
+    velocity = np.asarray(episode["observation.velocity"], dtype=float)
+    joints = velocity.shape[1]
+    if len(state) < 3:
+        return {"moving_frames": 0, "velocity_rms": None, "state_rate_rms": None, "gain": None}
+    rate = (state[2:, :joints] - state[:-2, :joints]) * fps / 2.0
+    recorded = velocity[1:-1]
+    keep = np.abs(rate).max(axis=1) > moving
+    if not keep.any():
+        return {"moving_frames": 0, "velocity_rms": None, "state_rate_rms": None, "gain": None}
+    rate, recorded = rate[keep], recorded[keep]
+    return {
+        "moving_frames": int(keep.sum()),
+        "velocity_rms": round(float(np.sqrt(np.mean(recorded**2))), 4),
+        "state_rate_rms": round(float(np.sqrt(np.mean(rate**2))), 4),
+        "gain": round(float(np.sum(recorded * rate) / np.sum(rate * rate)), 3),
     }
 
 

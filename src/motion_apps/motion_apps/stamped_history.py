@@ -16,7 +16,7 @@ from collections import deque
 
 import numpy as np
 
-__all__ = ["StampedHistory", "blend"]
+__all__ = ["StampedHistory", "blend", "rate_between"]
 
 
 def blend(before: np.ndarray, after: np.ndarray, u: float, quaternion: slice | None = None) -> np.ndarray:
@@ -33,6 +33,16 @@ def blend(before: np.ndarray, after: np.ndarray, u: float, quaternion: slice | N
         if norm > 0:
             out[quaternion] = out[quaternion] / norm
     return out
+
+
+def rate_between(before: np.ndarray, after: np.ndarray, stamp_before: float, stamp_after: float) -> np.ndarray:
+    """(``after`` - ``before``) per second between two stamped samples: the velocity a
+    stream without one (a driver's joint_states carry positions only) had between them;
+    zeros when both are the same sample (an end of the history)."""
+    before = np.asarray(before, dtype=np.float64)
+    after = np.asarray(after, dtype=np.float64)
+    dt = float(stamp_after) - float(stamp_before)
+    return (after - before) / dt if dt > 0 else np.zeros_like(after)
 
 
 class StampedHistory:

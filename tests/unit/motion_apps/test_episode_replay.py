@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 
 from motion_apps.episode_replay import EpisodeReplay
-from motion_apps.episode_report import dataset_size_bytes, format_summary, plot_episode, summarize_dataset
+from motion_apps.episode_report import (
+    dataset_size_bytes,
+    format_summary,
+    plot_episode,
+    summarize_dataset,
+    velocity_agreement,
+)
 
 
 class _Arm:
@@ -168,3 +174,13 @@ def test_replay_targets_between_frames_follow_the_recorded_curve():
     assert off_circle.max() < 0.3
     chord = 1000 * (0.3 - np.linalg.norm((path[:-1, :2] + path[1:, :2]) / 2, axis=1))
     assert chord.min() > 3.0
+
+
+def test_velocity_agreement_tells_recorded_velocities_from_missing_ones():
+    t = np.arange(50) / 10.0
+    state = np.column_stack([np.sin(t), np.cos(t), np.zeros_like(t)])  # two joints and the gripper
+    velocity = np.column_stack([np.cos(t), -np.sin(t)])
+    agreed = velocity_agreement({"observation.state": state, "observation.velocity": velocity}, fps=10.0)
+    assert agreed["moving_frames"] == 48 and agreed["gain"] == pytest.approx(1.0, abs=0.01)
+    missing = velocity_agreement({"observation.state": state, "observation.velocity": 0 * velocity}, fps=10.0)
+    assert missing["gain"] == 0.0

@@ -6,7 +6,7 @@ phase of its own): the cause of the replay's worst frames (5-6 mm at the teach d
 import numpy as np
 import pytest
 
-from motion_apps.stamped_history import StampedHistory, blend
+from motion_apps.stamped_history import StampedHistory, blend, rate_between
 
 FPS = 10.0
 DELAY = 0.02  # the recorder's FRAME_DELAY_S
@@ -72,3 +72,10 @@ def test_history_ends_and_order():
     assert history.around(2.0) == ((1.03, 1.03), (1.03, 1.03), 0.0)  # an idle stream holds
     before, after, u = history.around(1.015)
     assert (before[0], after[0], u) == (1.01, 1.02, pytest.approx(0.5))
+
+
+def test_the_rate_between_two_samples_is_the_velocity_of_a_stream_without_one():
+    # The drivers' joint_states carry positions only: the recorded joint velocity is the
+    # rate between the two samples around the frame's instant (it was left at zero).
+    np.testing.assert_allclose(rate_between([0.0, 1.0], [0.02, 0.99], 10.00, 10.01), [2.0, -1.0])
+    np.testing.assert_allclose(rate_between([0.5], [0.5], 3.0, 3.0), [0.0])  # one sample: at rest
