@@ -115,11 +115,19 @@ RECORD_HANDS = NodeInterface(
                 item_kind=str,
                 doc="motion_sensor/hand topics recorded",
             ),
+            Param(
+                "skeleton_topics",
+                ["motion_sensor/raw_hand_skeleton", "motion_sensor/hand_skeleton"],
+                item_kind=str,
+                doc="motion_sensor/HandSkeleton topics recorded (the replay plays raw_hand_skeleton with raw_hand)",
+            ),
         ]
     ),
     subscribes=(
         Topic("motion_sensor/raw_hand", _HAND, "recorded (default `~topics`)", optional=True),
         Topic("motion_sensor/hand", _HAND, "recorded (default `~topics`)", optional=True),
+        Topic("motion_sensor/raw_hand_skeleton", _SKELETON, "recorded (default `~skeleton_topics`)", optional=True),
+        Topic("motion_sensor/hand_skeleton", _SKELETON, "recorded (default `~skeleton_topics`)", optional=True),
     ),
 )
 

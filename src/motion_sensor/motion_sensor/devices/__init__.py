@@ -14,6 +14,8 @@ Its modules:
 - ``leap_server``: a Leap service replaying a recording (for tests and demos);
 - ``spacemouse``: SpaceMouse HID report decoding and rate-to-pose integration;
 - ``replay``: recorded streams (Leap v6, rosbag, CSV) as a device;
+- ``hand_csv``: the CSV layout of hand streams and their skeletons (read and write);
+- ``hand_bag``: a session's rosbag (record_hands) read back with its skeletons;
 - ``camera_intrinsics``: the pinhole camera model's re-export for the camera devices;
 - ``depth_image``: depth image decoding (16UC1 mm, 32FC1 m, Kinect 11-bit);
 - ``depth_hand``: hand tracking in depth images;
@@ -54,7 +56,9 @@ _PUBLIC = {
     "RateIntegrator": "spacemouse",
     "read_report_log": "spacemouse",
     "ReplayDevice": "replay",
-    "read_csv": "replay",
+    "read_csv": "hand_csv",
+    "write_csv": "hand_csv",
+    "read_bag": "hand_bag",
     "load_samples": "replay",
     "Intrinsics": "camera_intrinsics",
     "DepthImageError": "depth_image",

@@ -1,12 +1,17 @@
-"""Recorded hand streams: replay schedules, CSV and recording loading, and ReplayDevice,
-a recording as a HandDevice (nodes/hand_replay)."""
+"""Recorded hand streams: replay schedules, recording loading (Leap v6, rosbag, CSV), and
+ReplayDevice, a recording as a HandDevice (nodes/hand_replay). Each of them gives the
+hand's skeletons where the recording has them."""
 
 import dataclasses
 from collections.abc import Iterable, Iterator
 
 from motion_common.params import Param, ParamSchema
 from motion_sensor.devices.device import HAND_TYPE_PARAM, HandDevice, empty_sample, hand_preference
+from motion_sensor.devices.hand_bag import read_bag
+from motion_sensor.devices.hand_csv import CSV_COLUMNS, read_csv
 from motion_sensor.errors import EndOfStream, MotionSensorError
+
+__all__ = ["CSV_COLUMNS", "ReplayDevice", "load_samples", "read_csv", "replay_schedule"]
 
 
 def replay_schedule(
@@ -27,83 +32,16 @@ def replay_schedule(
         yield index, 0.0 if rate <= 0 else (t - origin) / rate
 
 
-CSV_COLUMNS = ("stamp", "x", "y", "z", "qx", "qy", "qz", "qw", "hand_type")
-
-
-def read_csv(path: str):
-    """Read a CSV hand stream: header ``stamp,x,y,z,qx,qy,qz,qw,hand_type`` (s, m, unit
-    quaternion, left/right; an empty hand_type row means no hand). Returns (samples,
-    rejected lines) as HandSamples; bad rows are skipped and listed, never fatal."""
-    import csv
-
-    import numpy as np
-
-    from motion_sensor.errors import MotionSensorError
-    from motion_sensor.hand_sample import HandSample
-
-    samples, rejected = [], []
-    try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            reader = csv.DictReader(fh)
-            missing = [c for c in CSV_COLUMNS if c not in (reader.fieldnames or [])]
-            if missing:
-                raise MotionSensorError(f"CSV {path} lacks columns {missing}; expected {','.join(CSV_COLUMNS)}")
-            for lineno, row in enumerate(reader, start=2):
-                try:
-                    values = [float(row[c]) for c in CSV_COLUMNS[:8]]
-                except (TypeError, ValueError):
-                    rejected.append(f"line {lineno}: non-numeric value")
-                    continue
-                hand_type = (row["hand_type"] or "").strip()
-                if hand_type not in ("", "left", "right"):
-                    rejected.append(f"line {lineno}: hand_type must be left, right or empty")
-                    continue
-                types = (hand_type,) if hand_type else ()
-                samples.append(
-                    HandSample(
-                        stamp=values[0],
-                        position=np.array(values[1:4]),
-                        orientation=np.array(values[4:8]),
-                        hands_num=len(types),
-                        hand_types=types,
-                        device="csv",
-                    )
-                )
-    except OSError as exc:
-        raise MotionSensorError(f"cannot read CSV {path}: {exc}") from None
-    if not samples:
-        raise MotionSensorError(f"CSV {path} holds no usable row ({len(rejected)} rejected)")
-    return samples, rejected
-
-
 def load_samples(path: str, primary: str = "right", frame_id: str = "leap", strict: bool = False):
     """([(recorded time s, HandSample)], rejected lines) of a Leap v6 recording (.jsonl,
-    .jsonl.gz), a rosbag of motion_sensor/hand (.bag) or a CSV (.csv). Frames without a hand
-    are kept (hands_num 0); with ``strict`` a Leap frame without the ``primary`` hand type
-    counts as one without a hand. Raises MotionSensorError for a file that cannot be used."""
+    .jsonl.gz), a rosbag of a session's hand streams (.bag, ``hand_bag``) or a CSV (.csv,
+    ``hand_csv``), each sample with the skeletons the recording holds. Frames without a hand
+    are kept (hands_num 0); with ``strict`` a Leap or CSV frame without the ``primary`` hand
+    type counts as one without a hand. Raises MotionSensorError for a file that cannot be used."""
     if path.endswith(".bag"):
-        import rosbag
-
-        from motion_sensor.ros_conversions import msg_to_sample
-
-        samples = []
-        try:
-            with rosbag.Bag(path) as bag:
-                for _, msg, t in bag.read_messages():
-                    if msg._type == "motion_sensor/hand":
-                        stamp = msg.header.stamp.to_sec() if msg.header.stamp else t.to_sec()
-                        sample = msg_to_sample(msg, device="bag")
-                        sample.frame_id = msg.header.frame_id or frame_id
-                        samples.append((stamp, sample))
-        except (OSError, rosbag.ROSBagException) as exc:
-            raise MotionSensorError(f"cannot read bag {path}: {exc}") from None
-        if not samples:
-            raise MotionSensorError(f"bag {path} has no motion_sensor/hand message")
-        return samples, []
+        return read_bag(path, frame_id)
     if path.endswith(".csv"):
-        rows, rejected = read_csv(path)
-        for sample in rows:
-            sample.frame_id = frame_id
+        rows, rejected = read_csv(path, primary, strict, frame_id)
         return [(sample.stamp, sample) for sample in rows], rejected
     from motion_sensor.devices.leap_v6 import frame_to_sample, read_recording
 
@@ -133,7 +71,11 @@ class ReplayDevice(HandDevice):
     wrapper_defaults = {"min_subscribers": 1}  # never play to nobody
     params = ParamSchema(
         [
-            Param("recording", "", doc="Leap v6 .jsonl(.gz), rosbag of motion_sensor/hand (.bag) or CSV (.csv)"),
+            Param(
+                "recording",
+                "",
+                doc="Leap v6 .jsonl(.gz), rosbag of record_hands (.bag) or CSV (.csv); skeletons replayed too",
+            ),
             Param("rate", 1.0, low=0, doc="speed factor: 1 the recorded timing, 0 as fast as possible"),
             Param("loop", False, doc="start again at the end (the node then never finishes)"),
             Param(
@@ -210,7 +152,9 @@ class ReplayDevice(HandDevice):
         if delay > 0:
             self.sleep(delay)
         self.counters["frames"] += 1
-        return dataclasses.replace(self.samples[index][1], stamp=self.clock())
+        sample, now = self.samples[index][1], self.clock()
+        skeletons = tuple(dataclasses.replace(skeleton, stamp=now) for skeleton in sample.skeletons)
+        return dataclasses.replace(sample, stamp=now, skeletons=skeletons)
 
     def close(self) -> None:
         pass
