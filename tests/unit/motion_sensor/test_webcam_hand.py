@@ -340,3 +340,23 @@ def test_calibration_file(tmp_path):
         load_depth_scale(str(tmp_path / "missing.yaml"))
     config = WebcamHandDevice.params.validate({"calibration_file": str(good)}, "test")
     assert WebcamHandDevice(config).tracker.depth_scale == 1.3
+
+
+def test_every_hand_seen_has_its_skeleton_with_its_handedness_and_number():
+    right = place(local_hand(), facing_camera(), [0.05, 0, 0.5], score=0.7)
+    left = place(local_hand(handedness="left"), facing_camera(), [-0.1, 0, 0.5], handedness="left", score=0.95)
+    twin = place(local_hand(), facing_camera(), [0.0, 0, 0.4], score=0.6)  # a second "right": no skeleton
+    detector = FakeDetector([[left, right], [left, right, twin], [right], [left, right]])
+    tracker = WebcamHandTracker(detector, intrinsics=K, primary_hand="right")
+    samples = [tracker.process(grey_frame(), float(i)) for i in range(4)]
+    kinds = [[(s.hand_type, s.hand_id) for s in sample.skeletons] for sample in samples]
+    # The primary first; each type keeps its number while in view, a returning one is new.
+    assert kinds[0] == [("right", 1), ("left", 2)] and kinds[1] == kinds[0]
+    assert kinds[2] == [("right", 1)] and kinds[3] == [("right", 1), ("left", 3)]
+    assert tracker.counters["duplicate_hands"] == 1 and samples[1].hands_num == 3
+    first = samples[0].skeletons
+    assert all(s.problem() is None and s.stamp == 0.0 for s in first)
+    assert first[0].confidence == pytest.approx(0.7) and first[1].confidence == pytest.approx(0.95)
+    palm = [s.joints[1] for s in first]  # canonical palm: the right hand's on the camera's left (-y)
+    assert palm[0][1] == pytest.approx(-0.05, abs=0.01) and palm[1][1] == pytest.approx(0.1, abs=0.01)
+    np.testing.assert_allclose(palm[0], samples[0].position, atol=0.01)

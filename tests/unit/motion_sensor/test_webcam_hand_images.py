@@ -104,3 +104,24 @@ def test_video_file_plays_once_one_message_per_frame(tmp_path):
     np.testing.assert_allclose([s.stamp for s in published], 50.0 + np.arange(20) / 15.0, atol=1e-9)
     assert sum(s.hands_num > 0 for s in published) >= 18
     assert device.counters["decode_failures"] == 0 and device.counters["frames"] == 20
+
+
+@pytest.mark.parametrize("photo", ["handSrc.jpg", "Back_Projection_Theory0.jpg"])
+def test_a_photo_beside_its_mirror_gives_two_skeletons_of_opposite_hands(photo):
+    """The mirror image of a hand is the other hand: MediaPipe sees two, and both skeletons
+    go out, each with its handedness, the mirrored one on the other side of the image."""
+    image = cv2.imread(os.path.join(DATA, photo))
+    both = np.hstack([image, cv2.flip(image, 1)])
+    tracker = WebcamHandTracker(MediaPipeHandDetector(static_image_mode=True), primary_hand="right")
+    sample = tracker.process(both, 1.5)
+    assert sample.hands_num == 2 and sorted(sample.hand_types) == ["left", "right"]
+    skeletons = sample.skeletons
+    assert [s.hand_type for s in skeletons] == ["right", "left"] and skeletons[0].hand_id != skeletons[1].hand_id
+    assert all(s.problem() is None and s.stamp == 1.5 for s in skeletons)
+    np.testing.assert_allclose(skeletons[0].joints[1], sample.position, atol=0.02)
+    # REP 103: y is to the camera's left; the two hands are on either side of the seam.
+    palms_y = sorted(s.joints[1][1] for s in skeletons)
+    assert palms_y[0] < -0.02 and palms_y[1] > 0.02
+    # Mirrored hands have mirrored shapes: the same finger lengths.
+    lengths = [np.linalg.norm(s.joints[9] - s.joints[6]) for s in skeletons]
+    assert lengths[0] == pytest.approx(lengths[1], rel=0.1)

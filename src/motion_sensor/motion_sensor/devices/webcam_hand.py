@@ -1,5 +1,6 @@
 """One webcam frame to one HandSample: frame checks, the detector, the palm pose of the
-primary hand and a tracking id, without ROS or a camera (``WebcamHandTracker``).
+primary hand, the skeleton of every hand seen and tracking ids, without ROS or a camera
+(``WebcamHandTracker``).
 
 Bad input never produces a pose: a black or saturated frame, a frame without a hand and a
 detection whose landmarks give no pose all go out as a frame without a hand (hands_num 0,
@@ -54,13 +55,19 @@ def frame_problem(frame, limits: FrameLimits = FrameLimits()) -> tuple[str, str]
 
 
 class WebcamHandTracker:
-    """Turns BGR frames into HandSamples of the primary hand.
+    """Turns BGR frames into HandSamples of the primary hand, with the skeleton of every
+    hand seen (up to the detector's ``max_num_hands``; the primary's first), as the Leap
+    driver sends both of its hands.
 
     ``intrinsics`` None derives them from each frame's size and ``hfov_deg``.
-    ``primary_hand`` is right, left or first (the detector's best). ``hand_id`` starts a new
-    number when a hand appears after a frame without one or the primary hand's type changes,
-    so the sequencer re-seeds its filter for a new hand. ``counters`` counts every frame's
-    outcome; ``last_problem`` says why the last frame had no pose.
+    ``primary_hand`` is right, left or first (the detector's best). Each hand type
+    (MediaPipe's handedness) keeps a number while it stays in view and gets a new one when
+    it appears after a frame without it, so ``hand_id`` changes when the primary hand's type
+    changes or a hand comes back, and the sequencer re-seeds its filter for a new hand. A
+    second hand of a type already seen in the frame (a handedness mistake) has no skeleton
+    (``duplicate_hands``); one whose landmarks give no pose neither (``bad_landmarks``).
+    ``counters`` counts every frame's outcome; ``last_problem`` says why the last frame had
+    no pose.
     """
 
     def __init__(
@@ -86,8 +93,8 @@ class WebcamHandTracker:
         self.mirrored = mirrored
         self.counters: Counter = Counter()
         self.last_problem = ""
-        self._hand_id = 0
-        self._tracked_type = ""
+        self._hand_id = 0  # the last number given
+        self._ids: dict[str, int] = {}  # hand type in view -> its number
 
     def intrinsics_for(self, width: int, height: int) -> Intrinsics:
         """The configured intrinsics, or those of the field of view at this frame size."""
@@ -96,7 +103,7 @@ class WebcamHandTracker:
     def _no_hand(self, stamp: float, counter: str, reason: str) -> HandSample:
         self.counters[counter] += 1
         self.last_problem = reason
-        self._tracked_type = ""
+        self._ids.clear()
         return empty_sample(stamp, self.frame_id, "webcam")
 
     def process(self, frame: np.ndarray, stamp: float) -> HandSample:
@@ -123,11 +130,23 @@ class WebcamHandTracker:
             pose = palm_pose(primary, self.intrinsics_for(width, height), self.depth_scale, self.thresholds)
         except ValueError as exc:
             return self._no_hand(stamp, "bad_landmarks", str(exc))
-        if primary.handedness != self._tracked_type:
-            self._hand_id += 1
-            self._tracked_type = primary.handedness
+        self._track_ids([primary] + [hand for hand in usable if hand is not primary])
         self.counters["hands"] += 1
         others = [hand.handedness for hand in usable if hand is not primary]
+        confidence = float(np.clip(primary.score, 0.0, 1.0))
+        skeletons = [self._skeleton(stamp, primary.handedness, pose.landmarks, confidence)]
+        for hand in usable:
+            if hand is primary:
+                continue
+            if any(s.hand_type == hand.handedness for s in skeletons):
+                self.counters["duplicate_hands"] += 1
+                continue
+            try:
+                landmarks = palm_pose(hand, self.intrinsics_for(width, height), self.depth_scale).landmarks
+            except ValueError:
+                self.counters["bad_landmarks"] += 1
+                continue
+            skeletons.append(self._skeleton(stamp, hand.handedness, landmarks, float(np.clip(hand.score, 0.0, 1.0))))
         return HandSample(
             stamp=stamp,
             position=pose.position,
@@ -135,22 +154,34 @@ class WebcamHandTracker:
             hands_num=len(usable),
             hand_types=tuple([primary.handedness] + others),
             frame_id=self.frame_id,
-            hand_id=self._hand_id,
+            hand_id=self._ids[primary.handedness],
             device="webcam",
             extra={"raw_depth": pose.raw_depth},
-            confidence=float(np.clip(primary.score, 0.0, 1.0)),
+            confidence=confidence,
             grab_strength=pose.grab_strength,
             pinch_strength=pose.pinch_strength,
             index_tip=pose.index_tip,
-            skeletons=(
-                SkeletonSample(
-                    stamp,
-                    mediapipe_to_canonical(pose.landmarks),
-                    primary.handedness,
-                    self._hand_id,
-                    float(np.clip(primary.score, 0.0, 1.0)),
-                    self.frame_id,
-                    "webcam",
-                ),
-            ),
+            skeletons=tuple(skeletons),
+        )
+
+    def _track_ids(self, hands) -> None:
+        """Keep the number of each hand type still in view; number the ones that appear."""
+        seen = {hand.handedness for hand in hands}
+        for hand_type in list(self._ids):
+            if hand_type not in seen:
+                del self._ids[hand_type]
+        for hand in hands:
+            if hand.handedness not in self._ids:
+                self._hand_id += 1
+                self._ids[hand.handedness] = self._hand_id
+
+    def _skeleton(self, stamp: float, hand_type: str, landmarks, confidence: float) -> SkeletonSample:
+        return SkeletonSample(
+            stamp,
+            mediapipe_to_canonical(landmarks),
+            hand_type,
+            self._ids[hand_type],
+            confidence,
+            self.frame_id,
+            "webcam",
         )
