@@ -222,3 +222,45 @@ def test_spotter_classifies_windows_and_takes_the_most_confident():
     assert events[0].info["start"] > segment_start + 0.1  # the later window's start
     with pytest.raises(ParameterError, match="window_starts"):
         SkeletonSpotter(stand_in, {"window_starts": [0.95]})
+
+
+def test_a_window_where_a_gesture_outside_the_labels_is_likely_does_not_count():
+    """With labels set, max_other_probability drops each window in which a gesture that may
+    not fire is that probable: the whole segment (a pinch's weight on a grab) is dropped and
+    the later window, clean, wins; when every window has it, nothing fires."""
+
+    class PinchWeighed:
+        def __init__(self, later_pinch):
+            self.later_pinch = later_pinch
+
+        def classify_batch(self, sequences):
+            longest = max(len(s) for s in sequences)
+            out = []
+            for seq in sequences:
+                prob = np.full(14, 0.001)
+                whole = len(seq) == longest
+                prob[0] = 0.9 if whole else 0.8  # grab, surer on the whole segment
+                prob[CLASSES_14.index("pinch")] = 0.08 if whole or self.later_pinch else 0.01
+                prob[1] = 1.0 - prob.sum() + prob[1]  # tap takes the rest
+                out.append(SkeletonResult(prob, np.full(28, 1 / 28)))
+            return out
+
+    settings = {"labels": ["grab", "tap"], "min_confidence": 0.6, "window_starts": [0.0, 0.2]}
+
+    def spot(classifier, **extra):
+        spotter = SkeletonSpotter(classifier, {**settings, **extra})
+        events = []
+        for stamp, frame in zip(*_hand_stream(moves=[3.0]), strict=True):
+            events.extend(spotter.update(stamp, frame))
+        return events, spotter.counters
+
+    events, _ = spot(PinchWeighed(later_pinch=False))
+    assert [(e.name, round(e.confidence, 2)) for e in events] == [("grab", 0.9)]  # off by default: the surer
+    events, _ = spot(PinchWeighed(later_pinch=False), max_other_probability=0.05)
+    assert [(e.name, round(e.confidence, 2)) for e in events] == [("grab", 0.8)]  # the clean window
+    events, counters = spot(PinchWeighed(later_pinch=True), max_other_probability=0.05)
+    assert events == [] and counters["other"] == 1
+    events, _ = spot(PinchWeighed(later_pinch=True), max_other_probability=0.1)
+    assert [e.name for e in events] == ["grab"]
+    with pytest.raises(ParameterError, match="max_other_probability"):
+        SkeletonSpotter(PinchWeighed(False), {"max_other_probability": 0.0})

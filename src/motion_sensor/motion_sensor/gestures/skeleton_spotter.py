@@ -24,7 +24,12 @@ a gesture is reported when
 - the best gesture's probability is at least ``min_confidence`` and its label is one of
   ``labels`` (all 14 when empty). The shipped network was trained to answer with no
   confident class on motion that is no gesture (``skeleton_negatives``), so the gate can
-  stay low.
+  stay low;
+- with ``labels`` set, a window counts only when no gesture outside them has a probability
+  of ``max_other_probability`` or more. The gestures that are no command are the ones a
+  command gets confused with (a pinch read as a grab, a swipe down as a tap): such a window
+  still gives the other gesture some weight, a real command almost none; and a window on
+  which the network is unsure (near uniform: 1/14 each) counts neither. 1 turns it off.
 
 After a gesture, a segment that starts before its end + ``refractory_s`` is ignored. A
 frame gap longer than ``max_gap_s`` (hand lost) drops the segment. Memory is bounded: the
@@ -55,6 +60,15 @@ SKELETON_SPOTTER_PARAMS = ParamSchema(
         Param("max_gap_s", 0.3, "s", "a longer frame gap drops the segment", low=0.0, low_open=True),
         Param("max_rate_hz", 200.0, "Hz", "bounds the frame history", low=1.0),
         Param("labels", [], "", "gestures that may fire (empty: all 14)", item_kind=str),
+        Param(
+            "max_other_probability",
+            1.0,
+            "",
+            "with labels set, a window counts only if every gesture outside them is less probable (1: off)",
+            low=0.0,
+            low_open=True,
+            high=1.0,
+        ),
         Param(
             "window_starts",
             [0.0, 0.2],
@@ -99,8 +113,10 @@ class SkeletonSpotter:
         self._calm_since = None  # stamp since which the hand rests outside a segment
         self._blocked_until = -np.inf
         self.counters = dict.fromkeys(
-            ("frames", "segments", "short", "long", "small", "unsure", "gestures", "gaps", "out_of_order"), 0
+            ("frames", "segments", "short", "long", "small", "unsure", "other", "gestures", "gaps", "out_of_order"), 0
         )
+        # Indices of the 14 classes outside ``labels``, weighed by max_other_probability.
+        self._others = np.array([k for k, name in enumerate(CLASSES_14) if name not in self.allowed], dtype=int)
 
     def reset(self):
         """Forget the history (the hand left)."""
@@ -198,7 +214,11 @@ class SkeletonSpotter:
             return []
         windows = self._windows(stamps)
         results = self.classifier.classify_batch([joints[first:] for first in windows])
-        pick = max(range(len(results)), key=lambda k: results[k].confidence)
+        counted = [k for k, result in enumerate(results) if not self._other_likely(result)]
+        if not counted:
+            self.counters["other"] += 1
+            return []
+        pick = max(counted, key=lambda k: results[k].confidence)
         best = results[pick]
         if best.label14 not in self.allowed or best.confidence < p["min_confidence"]:
             self.counters["unsure"] += 1
@@ -212,3 +232,10 @@ class SkeletonSpotter:
             "extent_m": round(extent, 4),
         }
         return [GestureEvent(best.label14, best.confidence, float(stamps[-1]), info)]
+
+    def _other_likely(self, result) -> bool:
+        """A gesture outside ``labels`` is too probable in this window's result."""
+        limit = self.params["max_other_probability"]
+        if limit >= 1.0 or not len(self._others):
+            return False
+        return float(np.max(np.asarray(result.prob14)[self._others])) >= limit
