@@ -44,19 +44,19 @@ def test_transition_and_draw_are_seeded_and_bounded():
     assert not NegativeSource()
 
 
-def test_tiny_retrain_learns_to_reject_non_gestures():
+def test_tiny_retrain_learns_to_reject_non_gestures(tiny_model):
     """Seeded: with rejection on, the network is less sure on real Leap motion it never saw
-    than without it, and still recognises a held-out person's gestures."""
+    than the same training without it (the shared tiny model), and still recognises a
+    held-out person's gestures."""
     from motion_sensor.gestures.skeleton_training import TrainConfig, predict, train_model
 
-    data = load_skeleton_dataset(SLICE)
-    held_out = data.subject == 10
+    from .conftest import TINY_SETTINGS
+
+    plain, data, held_out = tiny_model
     train = data.subset(~held_out)
     unseen = [w for r in leap_motion([os.path.join(DATA, "rollAndPitchCropped.jsonl.gz")]) for w in (r[:45], r[45:90])]
-    settings = {"filters": 8, "epochs": 30, "batch": 10, "lr": 5e-3, "lead_in": 0.5}
-    plain = train_model(train, TrainConfig(**settings))
     source = NegativeSource(leap_motion(LEAP), train.sequences, train.subject)
-    rejecting = train_model(train, TrainConfig(**settings, reject_share=0.5), negatives=source)
+    rejecting = train_model(train, TrainConfig(**TINY_SETTINGS, reject_share=0.5), negatives=source)
     sure_plain = predict(plain, unseen)[0].max(1).mean()
     sure_rejecting = predict(rejecting, unseen)[0].max(1).mean()
     assert sure_rejecting < sure_plain - 0.1
