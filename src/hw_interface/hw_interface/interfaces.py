@@ -32,8 +32,16 @@ MOTION_CONTROLLER_SERVER = NodeInterface(
         ),
         Topic("motion_controller/stop_latched", _BOOL, "the latched stop", latched=True),
         Topic("motion_controller/gripper", _BOOL, "gripper state after each accepted SET_GRIPPER", latched=True),
+        Topic("frames/joint_states", "sensor_msgs/JointState", "joint_states around each recorded frame's instant"),
+        Topic("frames/tool_pose", "geometry_msgs/PoseStamped", "the tool pose around each recorded frame's instant"),
     ),
     subscribes=(
+        Topic(
+            "frames/clock",
+            "std_msgs/Float64",
+            "a dataset recorder's frame period (s): starts the frames/ taps",
+            optional=True,
+        ),
         Topic("motion_commander/estop", _BOOL, "True latches the stop, False releases it"),
         Topic(
             "stop_all",

@@ -24,7 +24,15 @@ __all__ = ["FramePacer"]
 class FramePacer:
     """Ticks every ``period`` s from ``start``; streams read ``window`` s before each tick."""
 
-    def __init__(self, period: float, window: float, clock=time.monotonic, start: float | None = None, event=None):
+    def __init__(
+        self,
+        period: float,
+        window: float,
+        clock=time.monotonic,
+        start: float | None = None,
+        event=None,
+        catch_up: int = 0,
+    ):
         if period <= 0 or window < 0:
             raise ValueError(f"frame period {period} s and read window {window} s: period > 0, window >= 0")
         self.period = float(period)
@@ -33,6 +41,9 @@ class FramePacer:
         self.start = clock() if start is None else float(start)
         self._stopped = event if event is not None else threading.Event()
         self._next = self.start + self.period
+        self.catch_up = int(catch_up)  # missed ticks made up, at most, after a late call
+        self.made_up = 0  # ticks returned late by a period or more (made up)
+        self.skipped = 0  # ticks never returned (the caller was later than catch_up ticks)
         self._held = {}  # window opening time -> streams holding for it
         self._changed = threading.Condition()
 
@@ -79,11 +90,19 @@ class FramePacer:
         return sum(n for opens, n in self._held.items() if opens <= tick - self.window + 1e-6)
 
     def wait_tick(self) -> float | None:
-        """Sleep until the next tick; its time, or None once stopped. Ticks missed while
-        the caller was late are skipped, not made up."""
+        """Sleep until the next tick; its time, or None once stopped. Of the ticks missed
+        while the caller was late, the last ``catch_up`` are returned at once, one a call
+        (made up: a recorder whose streams keep their history makes their frames at their
+        own instants, instead of leaving a gap in time that the frames' fixed rate hides),
+        the older ones skipped."""
         now = self.clock()
         if self._next <= now - self.period:
-            self._next = self.next_tick(now)
+            oldest = self.next_tick(now) - self.catch_up * self.period
+            if self._next < oldest - 1e-9:
+                self.skipped += int(round((oldest - self._next) / self.period))
+                self._next = oldest
+            if self._next <= now - self.period:
+                self.made_up += 1
         tick, wait = self._next, self._next - now
         if wait > 0 and self._stopped.wait(wait):
             return None

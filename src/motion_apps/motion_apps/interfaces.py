@@ -157,6 +157,12 @@ EPISODE_RECORDER = NodeInterface(
             "episodes/status", "std_msgs/String", "recording state as JSON (episode, frames, last result)", latched=True
         ),
         Topic(
+            "frames/clock",
+            "std_msgs/Float64",
+            "the frame period (s): the producers' frames/ taps forward their streams around its multiples",
+            latched=True,
+        ),
+        Topic(
             "episodes/list",
             "std_msgs/String",
             "the saved episodes as JSON (index, task, frames, success)",
@@ -164,18 +170,18 @@ EPISODE_RECORDER = NodeInterface(
         ),
     ),
     subscribes=(
-        _JOINTS,
-        Topic("motion_controller/tool_pose", _POSE, "the measured tool pose"),
+        Topic("frames/joint_states", "sensor_msgs/JointState", "the measured joints around each frame's instant"),
+        Topic("frames/tool_pose", _POSE, "the measured tool pose around each frame's instant"),
         Topic("motion_controller/gripper", "std_msgs/Bool", "the gripper state"),
-        Topic("motion_sensor/hand", "motion_sensor/hand", "the operator's hand"),
+        Topic("frames/hand", "motion_sensor/hand", "the operator's hand around each frame's instant"),
         Topic(
-            "motion_sensor/hand_skeleton",
+            "frames/hand_skeleton",
             "motion_sensor/HandSkeleton",
-            "the operator's hand skeleton (devices that see fingers)",
+            "the operator's hand skeleton around each frame's instant (devices that see fingers)",
             optional=True,
         ),
-        Topic("motion_commander/command", "sensor_msgs/JointState", "the joint targets sent (the action)"),
-        Topic("motion_commander/target", _POSE, "the core's tool target"),
+        Topic("frames/command", "sensor_msgs/JointState", "the joint targets sent (the action) around each instant"),
+        Topic("frames/target", _POSE, "the core's tool target around each frame's instant"),
         Topic("camera/image_raw", "sensor_msgs/Image", "the camera (with ~camera)", optional=True),
         Topic("episodes/task", "std_msgs/String", "task text of the next episodes"),
         Topic("episodes/command", "std_msgs/String", "start, stop, discard, success, failure (for scripts)"),

@@ -36,8 +36,16 @@ MOTION_COMMANDER = NodeInterface(
             latched=True,
         ),
         Topic("motion_commander/speed_ratio", "std_msgs/Float64", "the speed ratio in force", latched=True),
+        Topic("frames/command", "sensor_msgs/JointState", "the joint targets around each recorded frame's instant"),
+        Topic("frames/target", _POSE, "the tool target around each recorded frame's instant"),
     ),
     subscribes=(
+        Topic(
+            "frames/clock",
+            "std_msgs/Float64",
+            "a dataset recorder's frame period (s): starts the frames/ taps",
+            optional=True,
+        ),
         Topic("joint_states", "sensor_msgs/JointState", "the measured joints"),
         Topic("motion_states_stamped", _POSE, "the hand pose with its sensor stamp (input: stamped)", optional=True),
         Topic(

@@ -30,6 +30,8 @@ layering. Its modules, by role:
   libraries print to the file descriptors, silenced around known-noisy start-up calls),
   ``quiet_pybullet`` (pybullet imported and connected without its console chatter), ``session_end`` (a finishing node
   stops the hand-started roslaunch that runs it, without the REQUIRED banner);
+- recording: ``frame_tap`` (a fast stamped stream thinned to the two messages around each
+  of a dataset recorder's frame instants, published by the stream's own node);
 - ``errors``: ``RobotModelError``, ``ParameterError``.
 
 The names in ``__all__`` are imported from their module on first use, so ``import
@@ -57,6 +59,7 @@ _PUBLIC = {
     "matrix_to_quaternion": "rotations",
     "multiply_quaternions": "rotations",
     "with_positive_w": "rotations",
+    "FrameTap": "frame_tap",
     "Intrinsics": "camera_model",
     "PinholeCamera": "camera_model",
     "CameraInfoError": "camera_model",

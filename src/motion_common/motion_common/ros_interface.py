@@ -9,18 +9,20 @@ namespace and remaps place them.
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import roslib.message
 import rospy
 
+from .frame_tap import FrameTap
 from .interface import NodeInterface
 from .ros_log_link import install as _install_log_link
 from .ros_params import load_private_params
 
 _install_log_link()
 
-__all__ = ["load_params", "publisher", "subscriber", "service", "service_proxy", "message_class"]
+__all__ = ["load_params", "publisher", "subscriber", "service", "service_proxy", "message_class", "frame_taps"]
 
 
 def message_class(type_name: str):
@@ -74,3 +76,41 @@ def service_proxy(node: NodeInterface, name: str, **kwargs) -> rospy.ServiceProx
     """A proxy of the declared called service ``name``."""
     entry = node.called(name)
     return rospy.ServiceProxy(entry.name, _service_class(entry.type), **kwargs)
+
+
+# The frame period a dataset recorder announces (latched std_msgs/Float64, s) and the taps
+# it reads instead of the fast streams themselves (motion_common.frame_tap).
+FRAME_CLOCK = "frames/clock"
+
+
+def frame_taps(node: NodeInterface, names, pairs: bool = True) -> dict:
+    """A ``FrameTap`` for each declared tap topic in ``names`` (``frames/<stream>``), all
+    following the period latched on ``frames/clock``; feed each with ``add(stamp, msg)``
+    right where the stream itself is published. ``pairs=False``: the first message after
+    each frame's instant only (a stream the recorder takes as it is)."""
+    taps = {}
+    for name in names:
+        pub = publisher(node, name, queue_size=4)
+        taps[name] = FrameTap(
+            lambda msg, pub=pub: _publish_unless_closing(pub, msg),
+            lambda pub=pub: pub.get_num_connections() > 0,
+            pairs=pairs,
+        )
+
+    def on_clock(msg):
+        period = float(msg.data)
+        for tap in taps.values():
+            tap.period = period if period > 0 and math.isfinite(period) else None
+
+    subscriber(node, FRAME_CLOCK, on_clock, queue_size=1)
+    return taps
+
+
+def _publish_unless_closing(pub: rospy.Publisher, msg) -> None:
+    """rospy closes topics in its shutdown hooks before is_shutdown() turns true: a tap fed
+    from a timer then finds its topic closed, which is not an error."""
+    try:
+        pub.publish(msg)
+    except rospy.ROSException:
+        if not (rospy.is_shutdown() or rospy.core.is_shutdown_requested()):
+            raise

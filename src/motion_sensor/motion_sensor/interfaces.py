@@ -51,8 +51,16 @@ SEQUENCER = NodeInterface(
             _SKELETON,
             "the skeletons whose palm frame passed (the same drop rules), device stamp kept",
         ),
+        Topic("frames/hand", _HAND, "the filtered hand around each recorded frame's instant"),
+        Topic("frames/hand_skeleton", _SKELETON, "the skeletons around each recorded frame's instant"),
     ),
     subscribes=(
+        Topic(
+            "frames/clock",
+            "std_msgs/Float64",
+            "a dataset recorder's frame period (s): starts the frames/ taps",
+            optional=True,
+        ),
         Topic("~input", _HAND, "the device stream (when `~inputs` is unset)", optional=True),
         Topic(
             "motion_sensor/raw_hand_skeleton",

@@ -111,3 +111,14 @@ def test_a_message_from_before_the_last_tick_does_not_hold():
     assert fake.now == 0.103  # not held
     pacer.hold(stamp=0.101)
     assert fake.now == pytest.approx(0.195)  # held until tick 0.2's window
+
+
+def test_a_late_caller_gets_the_ticks_it_missed_up_to_catch_up():
+    fake = FakeTime()
+    pacer = FramePacer(0.1, 0.0, clock=fake, start=0.0, event=fake, catch_up=2)
+    assert round(pacer.wait_tick(), 6) == 0.1
+    fake.now += 0.37  # the caller stalls (0.47): ticks 0.2, 0.3 and 0.4 passed meanwhile
+    ticks = [round(pacer.wait_tick(), 6) for _ in range(4)]
+    assert ticks == [0.3, 0.4, 0.5, 0.6]  # 0.2 too old; 0.3 (made up) and 0.4 (late) at once
+    assert (pacer.skipped, pacer.made_up) == (1, 1)
+    assert fake.now == pytest.approx(0.6)

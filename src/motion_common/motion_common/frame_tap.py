@@ -1,0 +1,53 @@
+"""A fast stamped stream thinned to what a recorder sampling it at a frame rate needs (plain
+Python: publishing and the subscriber count are injected, so it is tested without ROS).
+
+A dataset recorder makes a frame every ``period`` s of the wall clock, each standing for the
+instant ``k * period`` and blended between the two messages stamped around it. Subscribing
+to the 100-110 Hz streams themselves costs their publishers a serialisation and a write per
+message for each extra subscriber (most of recording's CPU), for ~2 messages a frame that
+are used. So the producer offers a tap: of the messages it publishes anyway, the tap
+forwards only the two around each multiple of the period (the last stamped at or before
+it and the first after it), ~2 per frame instead of ~10, and nothing while no one listens
+or the period is unknown. A stream the recorder takes as it is, not blended
+(``pairs=False``: the hand), needs only the first message after each multiple. The
+recorder announces the period (``FrameTap.period``).
+"""
+
+import math
+import threading
+
+__all__ = ["FrameTap"]
+
+
+class FrameTap:
+    """Forwards (``publish``) the messages of a stamped stream around each multiple of
+    ``period`` s, while ``connected()``."""
+
+    def __init__(self, publish, connected, period: float | None = None, pairs: bool = True):
+        self._publish = publish
+        self._connected = connected
+        self.period = period
+        self.pairs = pairs
+        self._last = None  # [bucket, message, forwarded] of the previous message
+        self._lock = threading.Lock()  # a stream may be fed from two threads
+
+    def add(self, stamp: float, message) -> int:
+        """Offer the stream's next message; how many messages were forwarded (0-2)."""
+        with self._lock:
+            return self._add(stamp, message)
+
+    def _add(self, stamp: float, message) -> int:
+        period = self.period
+        if not period or period <= 0 or not self._connected():
+            self._last = None
+            return 0
+        bucket = math.floor(stamp / period)
+        last, sent = self._last, 0
+        if last is not None and bucket > last[0]:  # a multiple of the period lies in (last, stamp]
+            if self.pairs and not last[2]:
+                self._publish(last[1])
+                sent += 1
+            self._publish(message)
+            sent += 1
+        self._last = [bucket, message, sent > 0]
+        return sent

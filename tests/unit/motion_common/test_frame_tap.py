@@ -1,0 +1,65 @@
+"""motion_common.frame_tap: only the messages around each multiple of the period go out,
+and the recorder's blend at each multiple gets the same two messages it would from the
+whole stream."""
+
+import numpy as np
+
+from motion_apps.stamped_history import StampedHistory
+from motion_common.frame_tap import FrameTap
+
+
+def _tap(period=0.1, connected=True):
+    sent = []
+    return FrameTap(sent.append, lambda: connected, period), sent
+
+
+def test_forwards_the_two_messages_around_each_multiple():
+    tap, sent = _tap()
+    for stamp in (0.071, 0.081, 0.091, 0.101, 0.111, 0.121):
+        tap.add(stamp, stamp)
+    assert sent == [0.091, 0.101]
+
+
+def test_nothing_without_a_listener_or_a_period():
+    tap, sent = _tap(connected=False)
+    for stamp in np.arange(0.0, 1.0, 0.01):
+        tap.add(float(stamp), stamp)
+    assert sent == []
+    tap, sent = _tap(period=None)
+    for stamp in np.arange(0.0, 1.0, 0.01):
+        tap.add(float(stamp), stamp)
+    assert sent == []
+
+
+def test_a_message_after_one_multiple_and_before_the_next_is_sent_once():
+    # 30 ms between messages at a 20 ms period: each message is after one multiple and
+    # before the next one.
+    tap, sent = _tap(period=0.02)
+    for stamp in (0.005, 0.035, 0.065, 0.095):
+        tap.add(stamp, stamp)
+    assert sent == [0.005, 0.035, 0.065, 0.095]
+
+
+def test_the_blend_at_each_instant_is_the_whole_streams():
+    rng = np.random.default_rng(3)
+    stamps = np.cumsum(rng.uniform(0.006, 0.014, 400)) + 1000.0
+    tap, sent = _tap(period=1 / 15)
+    whole = StampedHistory(maxlen=2000)
+    tapped = StampedHistory(maxlen=2000)
+    for stamp in stamps:
+        whole.add(stamp, stamp)
+        tap.add(stamp, stamp)
+    for stamp in sent:
+        tapped.add(stamp, stamp)
+    assert len(sent) < 0.35 * len(stamps)  # 2 of the ~6.7 messages a frame
+    first = int(np.ceil(stamps[0] * 15)) + 1
+    for k in range(first, int(stamps[-1] * 15)):
+        assert tapped.around(k / 15) == whole.around(k / 15)
+
+
+def test_without_pairs_only_the_first_message_after_each_multiple():
+    sent = []
+    tap = FrameTap(sent.append, lambda: True, 0.1, pairs=False)
+    for stamp in (0.071, 0.081, 0.091, 0.101, 0.111, 0.191, 0.201, 0.211):
+        tap.add(stamp, stamp)
+    assert sent == [0.101, 0.201]
