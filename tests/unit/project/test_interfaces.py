@@ -32,6 +32,7 @@ TOOLS = {
     "gesture_eval",
     "train_skeleton_gestures",
     "record_gesture",
+    "hands_to_csv",
 }
 
 
