@@ -14,7 +14,8 @@ Its modules, by role:
   ``motion_common.video_capture``, a lost camera reopened with backoff), ``image_msgs``
   (``sensor_msgs`` image and camera info conversions without cv_bridge),
   ``intrinsics_file``, ``calibration`` (ChArUco intrinsics, marker extrinsics),
-  ``calibration_views`` (choosing calibration views from a stream);
+  ``calibration_views`` (choosing calibration views from a stream), ``belt_edge`` (the
+  belt's far edge joining the marker corners in the camera registration);
 - vision: ``detector`` (the detectors' base and the classical OpenCV detector), ``onnx_detector`` (a YOLOv8 ONNX
   model through onnxruntime), ``geometry`` (pixel to belt plane), ``vision`` (detections
   to belt-plane poses), ``robot_silhouette`` (where the arm and gripper are in the image,
@@ -71,6 +72,10 @@ _PUBLIC = {
     "calibrate_intrinsics": "calibration",
     "write_intrinsics_yaml": "calibration",
     "extrinsics_from_marker": "calibration",
+    "BeltLine": "belt_edge",
+    "far_edge": "belt_edge",
+    "measure_line": "belt_edge",
+    "refine_with_lines": "belt_edge",
     "ViewCollector": "calibration_views",
     "PartDetector": "detector",
     "ClassicalDetector": "detector",

@@ -30,6 +30,9 @@ _TRAY_SWAPPED = Topic(
     "the finished kit's tray was taken away: every slot is free again (one part per slot until then)",
 )
 _JOINTS = Topic("joint_states", "sensor_msgs/JointState", "the arm's measured joints (where the arm is in the image)")
+_VISION_STATUS = Topic(
+    "kitting/vision/status", "diagnostic_msgs/DiagnosticStatus", "registration and detection state", latched=True
+)
 _STOP_LATCHED = Topic("motion_controller/stop_latched", "std_msgs/Bool", "the server's latched stop")
 
 _CELL_SIM_PARAMS = ParamSchema(
@@ -153,12 +156,7 @@ VISION_NODE = NodeInterface(
     ),
     publishes=(
         _PARTS,
-        Topic(
-            "kitting/vision/status",
-            "diagnostic_msgs/DiagnosticStatus",
-            "registration and detection state",
-            latched=True,
-        ),
+        _VISION_STATUS,
         Topic(
             "kitting/vision/annotated",
             "sensor_msgs/CompressedImage",
@@ -242,6 +240,7 @@ KITTING_TRIALS = NodeInterface(
         _TRUTH,
         _PARTS,
         _EVENTS,
+        _VISION_STATUS,
     ),
     calls=(
         Service("kitting_cell_sim/spawn", "kitting/SpawnPart", "feed a part"),

@@ -5,7 +5,12 @@
    gives the corners that lie inside it), averaged over the last ``registration_window``
    full registrations (per-image PnP noise is ~0.6 mm / 0.09°). A registration that
    differs from the average by more than ``moved_mm`` / ``moved_deg`` means the camera was
-   moved: the average restarts from it (re-registration, no restart needed).
+   moved: the average restarts from it (re-registration, no restart needed). The markers
+   lie on one line, which leaves the camera's tilt about it loose (0.3 px of corner
+   quantisation tilts it by up to ~0.8°): the belt's far edge, found along its length near
+   where the markers' pose puts it, joins their corners in one solve
+   (``kitting.belt_edge``; ``belt_edge_registration``), unless it is seen in fewer than
+   ``belt_edge_min_points`` columns or moves the pose implausibly far.
 2. Fewer markers than the cell has (one hidden, cut by the border): the pose prior (the
    last good registration, else the calibrated pose given as ``prior_pose``) is checked
    against them. When it reprojects their corners within ``prior_agreement_px`` it is
@@ -45,6 +50,7 @@ from scipy.spatial.transform import Rotation
 from motion_common.camera_model import PinholeCamera
 from motion_common.params import Param, ParamSchema
 
+from .belt_edge import far_edge, measure_line, refine_with_lines
 from .calibration import extrinsics_from_marker
 from .cell import Cell
 from .detector import ClassicalDetector, DetectionResult, Rejection, belt_mask_for, check_image
@@ -77,6 +83,21 @@ VISION_SCHEMA = ParamSchema(
             high=100.0,
         ),
         Param("belt_edge_margin", 0.0, "m", "strip along the belt's edges treated as 'edge'", low=0.0, high=0.2),
+        Param(
+            "belt_edge_registration",
+            True,
+            "",
+            "solve the camera pose from the marker corners and the belt's far edge together (pins the tilt "
+            "about the markers' line)",
+        ),
+        Param(
+            "belt_edge_min_points",
+            20,
+            "columns",
+            "fewest image columns where the far edge must be found for it to join the registration",
+            low=3,
+            high=10000,
+        ),
         Param("robot_mask", True, "", "mask the robot arm and gripper, projected from the joints, out of the image"),
         Param(
             "robot_mask_margin_px",
@@ -149,6 +170,9 @@ class VisionPipeline:
             urdf = self.params["robot_urdf"] or robot_urdf(cell.robot)
             self.silhouette = RobotSilhouette(urdf, cell.gripper.tcp_length)
         self.robot_mask: np.ndarray | None = None  # the last image's (uint8, 255 = arm)
+        # (marker ids, corner pixels, pose) of the last registration refined with the belt edge:
+        # the same corners give the same pose, so a still camera does not solve it again.
+        self._edge_cache = None
 
     # -- registration ------------------------------------------------------------------------
     def _register(self, image, stamp: float, occluded=None) -> str:
@@ -163,31 +187,69 @@ class VisionPipeline:
         if found.reprojection_px > self.params["max_reprojection_px"]:
             return f"marker reprojection {found.reprojection_px:.2f} px too large"
         if found.missing:
-            return self._register_partial(found, stamp)
+            return self._register_partial(found, stamp, image, occluded)
         self.counts["registered: every marker"] += 1
         self.registration = "full"
-        self._add_registration(found.T_base_cam, stamp)
+        self._add_registration(self._with_far_edge(found.T_base_cam, found, image, occluded), stamp)
         return ""
 
-    def _register_partial(self, found, stamp: float) -> str:
+    def _with_far_edge(self, pose, found, image, occluded) -> np.ndarray:
+        """``pose`` solved again from the marker corners and the belt's far edge together
+        (kitting.belt_edge), or ``pose`` unchanged when the edge is not seen well enough or
+        disagrees with the markers."""
+        if not self.params["belt_edge_registration"]:
+            return pose
+        cache = self._edge_cache
+        if (
+            cache is not None
+            and cache[0] == tuple(found.used)
+            and cache[1].shape == found.image_points.shape
+            and np.max(np.abs(cache[1] - found.image_points)) <= 0.25
+        ):
+            return cache[2]
+        edge = far_edge(self.cell.belt, pose[1, 3])
+        points = measure_line(image, self.camera.with_pose(pose), edge, occluded)
+        if len(points) < self.params["belt_edge_min_points"]:
+            self.counts["belt edge not seen: markers only"] += 1
+            return pose
+        refined = refine_with_lines(
+            pose, found.object_points, found.image_points, [(edge, points)], self.camera.K, self.camera.distortion
+        )
+        shift_mm = 1000.0 * np.linalg.norm(refined[:3, 3] - pose[:3, 3])
+        turn_deg = math.degrees(Rotation.from_matrix(pose[:3, :3].T @ refined[:3, :3]).magnitude())
+        if shift_mm > 10.0 * self.params["moved_mm"] or turn_deg > 4.0 * self.params["moved_deg"]:
+            # Further than corner quantisation can leave the markers' pose: something else
+            # was taken for the edge.
+            self.counts["belt edge disagrees with the markers: markers only"] += 1
+            return pose
+        self.counts["registered with the belt edge"] += 1
+        self._edge_cache = (tuple(found.used), found.image_points.copy(), refined)
+        return refined
+
+    def _register_partial(self, found, stamp: float, image, occluded) -> str:
         """Some markers seen: confirm the prior, or solve from them starting at the prior."""
         prior = self.camera_pose if self.camera_pose is not None else self.prior_pose
         seen = ", ".join(str(i) for i in found.used) or "edge corners"
         if prior is None:
             pose = found.T_base_cam
-        else:
-            if self.camera_pose is not None and self._reprojection(prior, found) <= self.params["prior_agreement_px"]:
+        elif self._reprojection(prior, found) <= self.params["prior_agreement_px"]:
+            if self.camera_pose is not None:
                 # The markers seen are where the held registration puts them: it still holds.
                 self.counts["registration confirmed by part of the markers"] += 1
                 self.registration = "confirmed"
                 self.registration_time = stamp
                 return ""
+            # The calibrated prior already explains the seen markers: a solve from fewer
+            # markers could only move it along the directions they leave loose (one
+            # marker's tilt), so the prior is taken as it is.
+            pose = prior
+        else:
             pose = self._refine_from(prior, found)
         if self._reprojection(pose, found) > self.params["max_reprojection_px"]:
             return f"marker(s) {seen}: no pose near the prior explains them"
         self.counts["registered: part of the markers"] += 1
         self.registration = "partial"
-        self._add_registration(pose, stamp)
+        self._add_registration(self._with_far_edge(pose, found, image, occluded), stamp)
         return ""
 
     def _reprojection(self, T_base_cam, found) -> float:
