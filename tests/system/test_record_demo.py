@@ -47,14 +47,16 @@ def test_record_demo_one_episode(tmp_path):
     # measured positions) and agree with the recorded positions' own rate.
     assert summary["velocity"]["moving_frames"] > 10, summary["velocity"]
     assert 0.7 < summary["velocity"]["gain"] < 1.3, summary["velocity"]
-    # The goal is 2 mm (docs/benchmarks.md), held at p95. A first frame made from values
-    # seconds old gave 60-70 mm at frame 1 and must not return; a single frame elsewhere
-    # still reaches 4-14 mm in some runs (not traced yet), so the worst is bounded only there.
+    # The goal is 2 mm (docs/benchmarks.md), held at p95; the worst frames, where the arm sets
+    # off from rest, reach 2-2.5 mm. A first frame made from values seconds old (60-70 mm at
+    # frame 1), or a frame skipped by a recorder held up on a loaded machine (the arm's travel
+    # in a frame: 4-14 mm), must not return: every frame stands for its own instant.
     replay = summary["replay"]
     assert replay["tool_error_mm_p95"] < 2.0, replay
-    assert replay["worst_frame"] > 1 or replay["tool_error_mm_max"] < 10.0, replay
+    assert replay["tool_error_mm_max"] < 5.0, replay
     with open(run / "record_demo.png", "rb") as stream:
         assert stream.read(8) == b"\x89PNG\r\n\x1a\n"
     assert "=== recorded dataset ===" in out and "episodes                 : 1" in out
     records = json.loads((run / "dataset" / "meta" / "teleop_episodes.json").read_text())
     assert len(records) == 1 and records[0]["camera_new_frames"] > 0
+    assert records[0]["ticks_skipped"] == 0, records[0]

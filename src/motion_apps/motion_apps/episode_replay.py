@@ -36,11 +36,19 @@ class ReplayReport:
     reason: str = ""
     unmeasured: int = 0  # frames whose tool pose never came (tool_at)
     worst_frame: int = -1
+    late_ms: dict = field(default_factory=dict)  # frame -> how late its targets went out (ms)
+    errors_by_frame: dict = field(default_factory=dict)  # frame -> tool error (mm)
 
     def add(self, frame: int, error_mm: float) -> None:
         if not self.tool_error_mm or error_mm > max(self.tool_error_mm):
             self.worst_frame = frame
         self.tool_error_mm.append(error_mm)
+        self.errors_by_frame[frame] = error_mm
+
+    def worst(self, count: int = 5) -> list:
+        """[frame, tool error mm, how late its targets went out ms] of the worst frames."""
+        ranked = sorted(self.errors_by_frame.items(), key=lambda item: -item[1])[:count]
+        return [[frame, round(error, 3), round(self.late_ms.get(frame, 0.0), 1)] for frame, error in ranked]
 
     def summary(self) -> dict:
         errors = np.asarray(self.tool_error_mm, dtype=float)
@@ -54,6 +62,8 @@ class ReplayReport:
             "reason": self.reason,
             "unmeasured": self.unmeasured,
             "worst_frame": self.worst_frame,
+            "worst_frames": self.worst(),
+            "late_ms_max": round(max(self.late_ms.values()), 1) if self.late_ms else 0.0,
         }
 
 
@@ -106,6 +116,7 @@ class EpisodeReplay:
         start = self.clock()
         for i, action in enumerate(actions):
             self._wait_until(start + i * self.period)
+            report.late_ms[i] = 1000.0 * (self.clock() - start - i * self.period)
             if i > 0 and tool_at is None:
                 position, _ = self.client.get_pose()
                 report.add(i, 1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
