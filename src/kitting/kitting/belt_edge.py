@@ -107,14 +107,17 @@ def refine_with_lines(T_base_cam, object_points, image_points, measured, K, dist
     """The camera pose (4x4, base frame) that best explains the marker corners
     (``object_points`` in the base frame, ``image_points`` in px) and the belt's edges
     together, starting from ``T_base_cam``; ``measured``: (BeltLine, points N x 2 px) pairs.
-    The edges together count as much as all the corners; residuals are in pixels."""
+    The edges together count as much as all the corners; residuals are in pixels.
+
+    Returns (pose, the corners' RMS reprojection px, the edge points' median distance px
+    from their line): a fit that agrees with both leaves each within a pixel or so."""
     K = np.asarray(K, float)
     distortion = np.asarray(distortion, float)
     object_points = np.asarray(object_points, float).reshape(-1, 3)
     image_points = np.asarray(image_points, float).reshape(-1, 2)
     lines = [(line, points) for line, points in measured if len(points)]
     points = np.vstack([points for _, points in lines]).reshape(-1, 1, 2) if lines else np.zeros((0, 1, 2))
-    rays = cv2.undistortPoints(points.astype(float), K, distortion).reshape(-1, 2)
+    rays = cv2.undistortPoints(points.astype(float), K, distortion).reshape(-1, 2) if len(points) else np.zeros((0, 2))
     rays = np.c_[rays, np.ones(len(rays))]  # camera frame, depth 1
     line_y = np.concatenate([np.full(len(p), line.y) for line, p in lines]) if lines else np.zeros(0)
     line_z = np.concatenate([np.full(len(p), line.height) for line, p in lines]) if lines else np.zeros(0)
@@ -140,4 +143,8 @@ def refine_with_lines(T_base_cam, object_points, image_points, measured, K, dist
     T_cam_base = np.linalg.inv(np.asarray(T_base_cam, float))
     start = np.r_[cv2.Rodrigues(T_cam_base[:3, :3])[0].ravel(), T_cam_base[:3, 3]]
     solution = least_squares(residuals, start, loss="soft_l1", f_scale=1.0, x_scale="jac")
-    return np.linalg.inv(pose_of(solution.x))
+    final = residuals(solution.x)
+    corners = final[: image_points.size].reshape(-1, 2)
+    corner_rms = float(np.sqrt(np.mean(np.sum(corners**2, axis=1))))
+    edge_median = float(np.median(np.abs(final[image_points.size :]) / weight)) if len(rays) else 0.0
+    return np.linalg.inv(pose_of(solution.x)), corner_rms, edge_median

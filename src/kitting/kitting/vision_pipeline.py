@@ -91,6 +91,24 @@ VISION_SCHEMA = ParamSchema(
             "about the markers' line)",
         ),
         Param(
+            "belt_edge_max_shift_mm",
+            25.0,
+            "mm",
+            "largest camera move the belt edge may make to the markers' registration (16 mm seen on the simulated "
+            "cell's perturbed poses)",
+            low=0.0,
+            high=1000.0,
+        ),
+        Param(
+            "belt_edge_max_turn_deg",
+            2.0,
+            "deg",
+            "largest camera turn the belt edge may make to the markers' registration (1.6 degrees seen on the "
+            "simulated cell's perturbed poses)",
+            low=0.0,
+            high=180.0,
+        ),
+        Param(
             "belt_edge_min_points",
             20,
             "columns",
@@ -212,14 +230,20 @@ class VisionPipeline:
         if len(points) < self.params["belt_edge_min_points"]:
             self.counts["belt edge not seen: markers only"] += 1
             return pose
-        refined = refine_with_lines(
+        refined, corner_rms, edge_median = refine_with_lines(
             pose, found.object_points, found.image_points, [(edge, points)], self.camera.K, self.camera.distortion
         )
         shift_mm = 1000.0 * np.linalg.norm(refined[:3, 3] - pose[:3, 3])
         turn_deg = math.degrees(Rotation.from_matrix(pose[:3, :3].T @ refined[:3, :3]).magnitude())
-        if shift_mm > 10.0 * self.params["moved_mm"] or turn_deg > 4.0 * self.params["moved_deg"]:
-            # Further than corner quantisation can leave the markers' pose: something else
-            # was taken for the edge.
+        if (
+            corner_rms > self.params["max_reprojection_px"]
+            or edge_median > 1.0
+            or shift_mm > self.params["belt_edge_max_shift_mm"]
+            or turn_deg > self.params["belt_edge_max_turn_deg"]
+        ):
+            # No pose explains both, or one further from the markers' than their corners'
+            # quantisation leaves it: something else was taken for the edge, or the belt is
+            # not where the cell says.
             self.counts["belt edge disagrees with the markers: markers only"] += 1
             return pose
         self.counts["registered with the belt edge"] += 1

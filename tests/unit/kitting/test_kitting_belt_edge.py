@@ -89,9 +89,10 @@ def test_the_far_edge_pins_the_tilt_the_markers_leave_loose(cell, views):
         edge = far_edge(cell.belt, found.T_base_cam[1, 3])
         points = measure_line(grey, camera.with_pose(found.T_base_cam), edge)
         assert len(points) > 60  # the edge is seen across the image
-        refined = refine_with_lines(
+        refined, corner_rms, edge_median = refine_with_lines(
             found.T_base_cam, found.object_points, found.image_points, [(edge, points)], camera.K, camera.distortion
         )
+        assert corner_rms < 0.8 and edge_median < 0.5, (corner_rms, edge_median)
         markers_only.append(_belt_error_mm(cell, camera.with_pose(found.T_base_cam), camera))
         with_edge.append(_belt_error_mm(cell, camera.with_pose(refined), camera))
     # The markers alone are off by 1-3 mm somewhere on the belt; with the edge, well under 1.
@@ -134,3 +135,17 @@ def test_the_pipeline_keeps_the_markers_pose_when_the_edge_is_not_there(cell, vi
     with_edge.process(rgb, 1.2)  # the same corners: the refined pose is reused, not solved again
     assert with_edge.counts["registered with the belt edge"] == 1
     assert _belt_error_mm(cell, camera.with_pose(with_edge.camera_pose), camera) < 0.6
+
+
+def test_an_edge_no_pose_can_match_with_the_markers_is_not_used(cell, views):
+    # The belt's far edge drawn 8 px (about 7 mm) from where the cell says it is, as if the
+    # belt were declared in the wrong place: the markers and the edge cannot both be right.
+    camera, grey, rgb = views[3]
+    rows = measure_line(grey, camera, far_edge(cell.belt, camera.pose[1, 3]))[:, 1]
+    bottom = int(rows.max()) + 20
+    moved = rgb.copy()
+    moved[8:bottom] = rgb[: bottom - 8]
+    pipeline = VisionPipeline(cell, camera.K, camera.distortion, camera.width, camera.height)
+    assert pipeline.process(moved, 1.0).registration == "full"
+    assert pipeline.counts["belt edge disagrees with the markers: markers only"] == 1
+    assert pipeline.counts["registered with the belt edge"] == 0
