@@ -836,3 +836,17 @@ def test_pipeline_rejects_corrupt_images(cell, rendered):
     assert pipeline.camera_pose is None and pipeline.counts["parts"] == 0
     # A good image afterwards is processed normally.
     _assert_parts_located(pipeline.process(rendered["image"], 10.0))
+
+
+def test_the_descent_is_timed_on_the_controller_before_the_first_pick(cell):
+    _, fake, picker, _ = _closed_loop(cell, {"descent_time": 0.2})
+    picker.go_to_wait()
+    moves = len(fake.moves)
+    took = picker.measure_descent()
+    length = picker.params["hover_height"] - picker.params["grasp_gap"]
+    # The fake controller takes 0.3 s + distance / 0.5 m/s per move (STEP-quantised).
+    assert took == pytest.approx(FakeController.OVERHEAD + length / FakeController.SPEED, abs=2 * STEP)
+    assert picker.descent_time == took
+    # Down and back: the tool ends where it started, clear of the belt.
+    assert len(fake.moves) == moves + 2
+    assert np.allclose(fake.moves[-1][1], fake.moves[-2][1] + [0.0, 0.0, length], atol=1e-9)
