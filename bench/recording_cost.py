@@ -93,7 +93,11 @@ class ProcessSampler:
                     grew = True
         for pid in tree:
             if pid in parents:
-                label = self.cpu.get(pid, (None,))[0] or self._label(pid)
+                label = self.cpu.get(pid, (None,))[0]
+                if label is None or (label in ("roslaunch", "python3", "nice", "?") and pid != root_pid):
+                    # A node seen between roslaunch's fork and its exec (or through `nice`)
+                    # bears its parent's name: asked again until it bears its own.
+                    label = self._label(pid)
                 self.cpu[pid] = (label, parents[pid][1])
         totals = {}
         for label, cpu in self.cpu.values():
