@@ -13,7 +13,7 @@ shared with the kitting application):
 - ``teach_report``: the teach demo's placement error, summary and taught-path plot;
 - demonstrations recorded as LeRobot datasets: ``episode_frames`` (what a frame holds, made
   at a fixed rate from the newest value of each stream), ``frame_pacer`` (the frame clock,
-  and when the fast streams need reading), ``stamped_history`` (the state, tool and command
+  which makes up the ticks a held-up recorder missed), ``stamped_history`` (the state, tool and command
   at a frame's instant, between the messages stamped around it), ``episode_recorder`` (start, stop,
   discard, mark success, the start/stop gesture, the episode list), ``episode_writer_client``
   (the writer process, fed without blocking), ``episode_wire`` (the messages to it),
