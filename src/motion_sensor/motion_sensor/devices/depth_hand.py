@@ -116,6 +116,18 @@ _CLOSE_KERNEL = np.ones((3, 3), np.uint8)
 # Near the previous palm, a part of the blob this fraction as wide as its widest still
 # counts as the palm; a narrower one means the hand moved further than track_radius_m.
 _TRACK_MIN_WIDTH = 0.3
+# Forearm and wrist (see _forearm_cut): the blob's width is profiled along its main axis in
+# sections this long (m); the forearm is the end whose 10 sections next to it vary in width
+# by less than _EVEN_RATIO times the other end's (an even cylinder against fingers and
+# palm); the wrist is the first section, walking from the forearm's end, narrower than
+# _WRIST_NARROWING times the forearm's width; the palm is searched from _WRIST_CUT_M
+# beyond it toward the fingers.
+_SECTION_M = 0.01
+_EVEN_RATIO = 0.6
+_WRIST_NARROWING = 0.85
+_WRIST_CUT_M = 0.04
+_FLIP_FRAMES = 3
+_FOREARM_SIDE_M = 0.015
 
 
 @dataclass
@@ -151,6 +163,8 @@ class DepthHandTracker:
             )
         self._ray_cache = None
         self._last_axis = None  # fingers direction (optical) of the previous frame
+        self._last_arm = None  # the blob's main axis toward the fingers, previous frame
+        self._flip_votes = 0  # successive frames whose width profile turned that axis over
         self._last_position = None
         self._last_surface = None  # seen palm surface of the previous frame (optical)
         self._hand_id = 0
@@ -159,6 +173,7 @@ class DepthHandTracker:
     def reset(self) -> None:
         """Forget the previous hand (a new stream)."""
         self._last_axis = None
+        self._last_arm = None
         self._last_position = None
         self._last_surface = None
 
@@ -208,6 +223,7 @@ class DepthHandTracker:
         )
 
     def _lost(self):
+        self._last_arm = None
         self._last_position = None
         self._last_surface = None
 
@@ -274,6 +290,66 @@ class DepthHandTracker:
         candidates.sort(key=lambda item: item[1])
         return labels, stats, candidates
 
+    def _forearm_cut(self, pts, z, xs, ys):
+        """(main axis toward the fingers or None, whether the width profile oriented it,
+        mask of the crop's pixels on the hand's side of the wrist or None).
+
+        A palm turned edge-on is narrower than the forearm, so the widest part of the blob
+        is no palm then: the blob's 3-D points (``pts``, optical, m) are profiled along their
+        main axis in sections of metric width (across the axis and the line of sight), the
+        forearm is the end whose width stays even, and the wrist where the width first drops
+        below the forearm's walking from there (see the constants)."""
+        if len(pts) < 20:
+            return None, False, None
+        mean = pts.mean(axis=0)
+        arm = np.linalg.eigh(np.cov((pts - mean).T))[1][:, 2]
+        if self._last_arm is not None and float(arm @ self._last_arm) < 0:
+            arm = -arm
+        s_pts = (pts - mean) @ arm
+        s_lo, s_hi = np.percentile(s_pts, (0.5, 99.5))
+        count = int((s_hi - s_lo) / _SECTION_M) + 1
+        if count <= 20:
+            return arm, False, None
+        across = np.cross(arm, mean / np.linalg.norm(mean))
+        across /= np.linalg.norm(across)
+        section = np.clip(((s_pts - s_lo) / _SECTION_M).astype(int), 0, count - 1)
+        q = pts @ across
+        high, low = np.full(count, -np.inf), np.full(count, np.inf)
+        np.maximum.at(high, section, q)
+        np.minimum.at(low, section, q)
+        width = np.where(np.isfinite(high), high - low, 0.0)
+        ends = width[2:12], width[count - 12 : count - 2]
+        spread = [float(np.std(e)) / max(float(np.mean(e)), 1e-3) for e in ends]
+        flip = None  # what the profile says: the forearm at the far end, fingers the other way
+        if spread[1] < _EVEN_RATIO * spread[0]:
+            flip = True
+        elif spread[0] < _EVEN_RATIO * spread[1]:
+            flip = False
+        profiled = flip is not None
+        if self._last_arm is not None:
+            # The axis cannot turn over between two frames: the profile overrules the
+            # previous frame's direction only when it has said so for _FLIP_FRAMES frames.
+            self._flip_votes = self._flip_votes + 1 if flip else 0
+            if self._flip_votes < _FLIP_FRAMES:
+                flip = False
+            else:
+                self._flip_votes = 0
+        elif flip is None:
+            return arm, False, None
+        if flip:
+            arm, s_pts, width, s_lo = -arm, -s_pts, width[::-1], -s_hi
+        forearm = float(np.median(width[2:12]))
+        # The wrist lies before the first section wider than the forearm (a palm facing the
+        # camera) and short of the fingertips' last sections, which taper.
+        wide = np.nonzero(width[4:] > forearm / _WRIST_NARROWING)[0]
+        end = 4 + int(wide[0]) if wide.size else count - 3
+        narrow = np.nonzero(width[4:end] < _WRIST_NARROWING * forearm)[0]
+        if narrow.size == 0:
+            return arm, profiled, None
+        wrist = s_lo + (narrow[0] + 4) * _SECTION_M
+        along = (xs[None, :] * z - mean[0]) * arm[0] + (ys[:, None] * z - mean[1]) * arm[1] + (z - mean[2]) * arm[2]
+        return arm, profiled, (along >= wrist + _WRIST_CUT_M, along < wrist + _FOREARM_SIDE_M)
+
     def _measure(self, depth, labels, stats, label, intr, xs, ys):
         """(palm centre, optical rotation, grab) of one blob, or None."""
         c = self.config
@@ -288,6 +364,12 @@ class DepthHandTracker:
         # Single lost pixels inside the hand (speckle, dropout) would each put a zero in the
         # distance transform: closed before it.
         filled = cv2.morphologyEx(blob.view(np.uint8), cv2.MORPH_CLOSE, _CLOSE_KERNEL)
+        # 3-D points of the blob (every second pixel is plenty for the axes).
+        sub = blob[::2, ::2]
+        zz = z[::2, ::2][sub]
+        rows, cols = np.nonzero(sub)
+        pts = np.column_stack((xs[l0:l1:2][cols] * zz, ys[t0:t1:2][rows] * zz, zz))
+        arm, profiled, hand_side = self._forearm_cut(pts, z, xs[l0:l1], ys[t0:t1])
         dist = cv2.distanceTransform(filled, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
         search = np.where(filled.view(bool) & (z < front + c["palm_search_depth_m"]), dist, 0.0)
         if self._last_surface is not None and c["track_radius_m"] > 0:
@@ -299,6 +381,15 @@ class DepthHandTracker:
             local = np.where(close, search, 0.0)
             if float(local.max()) >= max(1.0, _TRACK_MIN_WIDTH * float(search.max())):
                 search = local
+        if hand_side is not None:
+            # A palm found on the forearm's side of the wrist is the forearm: searched again
+            # on the hand's side only.
+            hand_side, forearm_side = hand_side
+            at = np.unravel_index(int(np.argmax(search)), search.shape)
+            if forearm_side[at]:
+                hand = np.where(hand_side, search, 0.0)
+                if float(hand.max()) >= 1.0:
+                    search = hand
         peak = float(search.max())
         if peak < 1.0:
             self.last_reason = "blob too thin for a palm"
@@ -316,11 +407,12 @@ class DepthHandTracker:
             return None
         zc = float(np.median(patch))
         centre = np.array([(u - intr.cx) / intr.fx * zc, (v - intr.cy) / intr.fy * zc, zc])
-        # 3-D points of the blob (every second pixel is plenty for the axes).
-        sub = blob[::2, ::2]
-        zz = z[::2, ::2][sub]
-        rows, cols = np.nonzero(sub)
-        pts = np.column_stack((xs[l0:l1:2][cols] * zz, ys[t0:t1:2][rows] * zz, zz))
+        if arm is not None:
+            # Without a clear forearm in the first frame, the palm found says which end
+            # holds the fingers.
+            if not profiled and self._last_arm is None and float((centre - pts.mean(axis=0)) @ arm) < 0:
+                arm = -arm
+            self._last_arm = arm
         offsets = pts - centre
         dist3 = np.einsum("ij,ij->i", offsets, offsets)
         palm_r = peak * zc / intr.fx
