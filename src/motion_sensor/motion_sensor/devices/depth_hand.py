@@ -17,7 +17,11 @@ an operator reaching towards it (the paper's Kinect set-up):
    ``track_radius_m`` of the previous palm as long as the blob there is at least 30 % as
    wide as its widest part (a palm turning edge-on narrows, and must not hand over to the
    forearm); further away, the hand moved more than that and the whole blob is searched.
-   The centroid of the transform's ridge (within ``ridge_px`` of the maximum) gives a
+   A palm tilted or edge-on can still be narrower than the forearm: the blob's 3-D points
+   are profiled along their main axis in 1 cm sections of metric width, the forearm is the
+   end of even width and the wrist the first section, from there, clearly narrower than
+   it; a maximum found on the forearm's side of the wrist is searched again on the hand's
+   side (``_forearm_cut``). The centroid of the transform's ridge (within ``ridge_px`` of the maximum) gives a
    sub-pixel centre; the median depth in a disc around it back-projects it with the
    intrinsics to the seen palm *surface*, and the palm centre is reported
    ``palm_half_thickness_m`` behind it along the normal (step 3), met by the pixel's ray
