@@ -294,9 +294,9 @@ class DepthHandTracker:
         candidates.sort(key=lambda item: item[1])
         return labels, stats, candidates
 
-    def _forearm_cut(self, pts, z, xs, ys):
+    def _forearm_cut(self, pts):
         """(main axis toward the fingers or None, whether the width profile oriented it,
-        mask of the crop's pixels on the hand's side of the wrist or None).
+        the wrist as (a point, its position along that axis from the point) or None).
 
         A palm turned edge-on is narrower than the forearm, so the widest part of the blob
         is no palm then: the blob's 3-D points (``pts``, optical, m) are profiled along their
@@ -351,8 +351,7 @@ class DepthHandTracker:
         if narrow.size == 0:
             return arm, profiled, None
         wrist = s_lo + (narrow[0] + 4) * _SECTION_M
-        along = (xs[None, :] * z - mean[0]) * arm[0] + (ys[:, None] * z - mean[1]) * arm[1] + (z - mean[2]) * arm[2]
-        return arm, profiled, (along >= wrist + _WRIST_CUT_M, along < wrist + _FOREARM_SIDE_M)
+        return arm, profiled, (mean, wrist)
 
     def _measure(self, depth, labels, stats, label, intr, xs, ys):
         """(palm centre, optical rotation, grab) of one blob, or None."""
@@ -373,7 +372,7 @@ class DepthHandTracker:
         zz = z[::2, ::2][sub]
         rows, cols = np.nonzero(sub)
         pts = np.column_stack((xs[l0:l1:2][cols] * zz, ys[t0:t1:2][rows] * zz, zz))
-        arm, profiled, hand_side = self._forearm_cut(pts, z, xs[l0:l1], ys[t0:t1])
+        arm, profiled, wrist = self._forearm_cut(pts)
         dist = cv2.distanceTransform(filled, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
         search = np.where(filled.view(bool) & (z < front + c["palm_search_depth_m"]), dist, 0.0)
         if self._last_surface is not None and c["track_radius_m"] > 0:
@@ -385,13 +384,20 @@ class DepthHandTracker:
             local = np.where(close, search, 0.0)
             if float(local.max()) >= max(1.0, _TRACK_MIN_WIDTH * float(search.max())):
                 search = local
-        if hand_side is not None:
+        if wrist is not None:
             # A palm found on the forearm's side of the wrist is the forearm: searched again
             # on the hand's side only.
-            hand_side, forearm_side = hand_side
-            at = np.unravel_index(int(np.argmax(search)), search.shape)
-            if forearm_side[at]:
-                hand = np.where(hand_side, search, 0.0)
+            mean, s_wrist = wrist
+            at_v, at_u = np.unravel_index(int(np.argmax(search)), search.shape)
+            z_at = z[at_v, at_u]
+            found = np.array([xs[l0 + at_u] * z_at, ys[t0 + at_v] * z_at, z_at])
+            if float((found - mean) @ arm) < s_wrist + _FOREARM_SIDE_M:
+                along = (
+                    (xs[l0:l1][None, :] * z - mean[0]) * arm[0]
+                    + (ys[t0:t1][:, None] * z - mean[1]) * arm[1]
+                    + (z - mean[2]) * arm[2]
+                )
+                hand = np.where(along >= s_wrist + _WRIST_CUT_M, search, 0.0)
                 if float(hand.max()) >= 1.0:
                     search = hand
         peak = float(search.max())
