@@ -382,6 +382,8 @@ class KittingPicker:
                 # Nothing held; after a suspected miss the magnet stays on instead (if
                 # the part is held after all, it is never dropped onto the belt).
                 self._release_quietly()
+            if self.holding is None and not exc.result:
+                self._clear_the_view()
             retry = isinstance(exc, (PickMissed, PickDeferred))
             if exc.result or record.attempts >= self.params["max_attempts"] or not retry:
                 record.done = exc.result == 0 or self.holding is not None
@@ -523,6 +525,16 @@ class KittingPicker:
         if present is False:
             return False, "the gripper's part sensor reads no part"
         return False, "no camera image since the lift and no gripper part sensor reading: no evidence the part is held"
+
+    def _clear_the_view(self):
+        """Back to the wait position after a pick that did not happen: over the belt the arm
+        can stand between the camera and the markers, and with the registration gone no part
+        is seen again (a cell once waited there for good). A refused or stopped move leaves
+        the arm where it is; the stop is the operator's to handle."""
+        try:
+            self.go_to_wait()
+        except PickAborted:
+            pass
 
     def go_to_wait(self):
         """Tool to the wait position (MoveL at transit height first)."""

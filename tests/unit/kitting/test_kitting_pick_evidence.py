@@ -150,3 +150,27 @@ def test_a_part_still_on_the_magnet_after_the_release_is_failed(cell):
         assert events[-1].event == "failed" and "still on the magnet" in events[-1].reason
     finally:
         sim.close()
+
+
+def test_after_a_pick_that_did_not_happen_the_arm_clears_the_cameras_view(cell):
+    # The camera sees the cell only while the arm waits at its wait position: anywhere over
+    # the belt the arm hides the markers (as a perturbed camera can make it), so the part is
+    # never seen again while the arm hovers.
+    sim, fake, picker, events = _closed_loop(cell, {"max_pose_age": 0.2})
+    wait = picker.params["wait_position"]
+
+    def blind_away_from_wait(target):
+        fake.blind = bool(max(abs(a - b) for a, b in zip(target, wait)) > 1e-6)
+
+    fake.before_move = blind_away_from_wait
+    try:
+        sim.spawn("nut_silver")
+        _run(picker, fake, events, ("missed", "failed", "placed"))
+        assert events[-1].event == "missed" and events[-1].reason.startswith("deferred"), [
+            (e.event, e.reason) for e in events
+        ]
+        # Back at the wait position: the camera sees the belt again.
+        assert list(fake.moves[-1][1]) == pytest.approx(wait)
+        assert not fake.blind
+    finally:
+        sim.close()
