@@ -24,7 +24,8 @@ Its modules, by role:
 - picking: ``tracking`` (a Kalman filter per part), ``intercept`` (where and when to meet
   a part on the moving belt), ``picker`` (the kitting cycle), ``slot_program`` (tray slot
   poses from a program taught by gesture), ``kits`` (kits of one part per slot, kit order
-  files, ARIAC's kitting score), ``campaign`` (trials and their statistics).
+  files, ARIAC's kitting score), ``campaign`` (trials and their statistics), ``cycle_phases``
+  (where a pick's cycle goes).
 
 No module here imports rospy (``image_msgs`` uses the generated ``sensor_msgs`` classes
 only); the nodes are the ROS edges. The names in ``__all__`` are imported from their
@@ -104,6 +105,8 @@ _PUBLIC = {
     "plan_trials": "campaign",
     "Trial": "campaign",
     "CampaignStats": "campaign",
+    "PHASES": "cycle_phases",
+    "phase_summary": "cycle_phases",
     "Kit": "kits",
     "KitScore": "kits",
     "KitOrderError": "kits",

@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .cycle_phases import phase_summary
 from .kits import kit_summary
 from .parts import CLASS_NAMES
 
@@ -76,6 +77,7 @@ class PartRecord:
     pose_errors_mm: list[float] = field(default_factory=list)
     events: list[str] = field(default_factory=list)  # as the operator reads them
     unverified: int = 0  # picks the camera could not confirm (no image since the lift)
+    phases: dict = field(default_factory=dict)  # the placing pick's timed phases (kitting.cycle_phases), s
     final_state: str = ""
     slot: str = ""
     resolved: float | None = None
@@ -152,6 +154,11 @@ class CampaignStats:
             self.parts[part_id].events.append(event)
             self.parts[part_id].unverified += not verified
 
+    def add_phases(self, part_id: int, phases: dict):
+        """The timed phases (phase -> s) of the pick that ended a part's cycle."""
+        if part_id in self.parts:
+            self.parts[part_id].phases = {str(k): float(v) for k, v in phases.items()}
+
     def resolve(self, part_id: int, state: str, slot: str, now: float, reason: str = ""):
         record = self.parts[part_id]
         record.final_state, record.slot, record.resolved, record.reason = state, slot, now, reason
@@ -185,6 +192,8 @@ class CampaignStats:
             # Parts that rode off the belt's end never picked (left the pick window unpicked).
             "misses": sum(r.final_state == "gone" and not r.picked for r in records),
             "arrival_rate_per_min": arrival,
+            # Where the cycle goes: each phase over the picks that placed their part.
+            "cycle_phases_s": phase_summary(r.phases for r in records if r.success),
             **kit_summary(self.kit_scores),
             "per_class": self.per_class(),
             "failures": [
@@ -213,6 +222,7 @@ class CampaignStats:
                     events=r.events,
                     final_state=r.final_state,
                     slot=r.slot,
+                    phases=r.phases,
                 )
                 for r in records
             ],

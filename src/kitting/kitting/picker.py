@@ -11,19 +11,26 @@ One pick (all heights are of the magnet face, ``cell.gripper.tcp_length`` below 
    upstream of the intercept by the belt travel during the descent; magnet on;
 3. wait for the start time (re-planned from the newest track), then descend diagonally,
    with the belt, onto the part's top (MoveL) and lift straight up;
-4. verify with the camera: a part still seen on the belt where the track predicts it was
-   missed; it is retried while it is reachable, otherwise logged with the reason;
-5. carry (MoveL at ``transit_height``), lower into the slot, magnet off, lift.
+4. carry: one straight MoveL from the lift point to ``transit_height`` above the slot (the
+   lift point is high enough above the belt and the tray for a straight path; the path is
+   checked); meanwhile the camera checks the pick: a part still seen on the belt where the
+   track predicts it, in the images taken after the lift, was missed. Above the slot the
+   cycle waits until ``verify_time`` has passed since the lift (the check's images); a
+   missed part is retried while it is reachable, otherwise logged with the reason;
+5. lower into the slot, magnet off, lift back to transit height: the next pick's approach
+   starts from there.
+
+Each pick's phases are timed (``kitting.cycle_phases``) and sent with its final event.
 
 Evidence, never a silent success:
 
 - a part is never picked on a pose older than ``max_pose_age`` s (its newest sighting):
   such a track waits for fresh sightings, and a descent about to start on one is deferred;
-- a pick the camera could not confirm after the lift (no image) is checked again above
-  the slot, before the release: by the images that came in meanwhile (late ones count),
-  else by the gripper's part sensor (``part_present``: True, False or None when it has no
-  reading). With neither, or with evidence against, the part is reported ``failed``, not
-  ``placed``;
+- a pick the camera could not confirm (no image since the lift, also after a second
+  ``verify_time`` above the slot) is checked again before the release: by the images that
+  came in meanwhile (late ones count), else by the gripper's part sensor (``part_present``:
+  True, False or None when it has no reading). With neither, or with evidence against,
+  the part is reported ``failed``, not ``placed``;
 - after the release, a part still on the magnet (part sensor) or seen on the belt after
   the lift is reported ``failed``.
 
@@ -35,7 +42,10 @@ reached goes first (earliest deadline first); a part that can no longer be reach
 
 Every path is checked before it is sent: no point of the tool's magnet may come closer
 than ``clearance`` to the belt or the tray except the grasp and release points themselves
-(``check_segment``). The descent duration is learned from the measured moves.
+(``check_segment``). The descent duration is learned from the measured moves, and so is
+the approach: the reach-time estimate (``move_overhead``, ``tool_speed``) is scaled by the
+largest ratio of measured to estimated approach time of the last five picks (a slower
+controller, a loaded machine).
 
 STOP, the server's latched stop and refusals come back as exceptions with a result code:
 the cycle ends with a ``failed`` event; a held part stays on the magnet; ``recover`` (after
@@ -85,10 +95,17 @@ PICKER_SCHEMA = ParamSchema(
             low=0.05,
             high=10.0,
         ),
-        Param("tool_speed", 0.35, "m/s", "average tool speed of the reach-time estimate", low=0.01, high=5.0),
+        Param(
+            "tool_speed",
+            0.6,
+            "m/s",
+            "average tool speed of the reach-time estimate (before it is scaled by the measured approaches)",
+            low=0.01,
+            high=5.0,
+        ),
         Param(
             "move_overhead",
-            0.6,
+            0.15,
             "s",
             "fixed time per move of the reach-time estimate (accelerations, calls)",
             low=0.0,
@@ -102,7 +119,8 @@ PICKER_SCHEMA = ParamSchema(
             "verify_time",
             0.6,
             "s",
-            "time after the lift in which a fresh sighting means a missed pick",
+            "time after the lift in which a fresh sighting means a missed pick (the carry goes on meanwhile; "
+            "the release waits for it)",
             low=0.0,
             high=10.0,
         ),
@@ -148,6 +166,7 @@ class KittingEvent:
     position: np.ndarray | None = None
     time: float = 0.0
     verified: bool = True  # picked: the camera confirmed the part left the belt
+    phases: dict | None = None  # the pick's final event: phase -> s (kitting.cycle_phases)
 
 
 @dataclass
@@ -260,7 +279,9 @@ class KittingPicker:
         self.holding: Track | None = None
         self.magnet_on = False
         self.orientation = list(self.params["tool_orientation"])
-        self.cycle_times: list[float] = []
+        self.cycle_times: deque[float] = deque(maxlen=1000)
+        # measured / estimated approach time of the last picks: the reach-time estimate's scale
+        self.approach_ratios: deque[float] = deque(maxlen=5)
         # observe() runs on the image callback's thread, the cycle on its own: the lock
         # keeps a Kalman update from interleaving with a plan reading the same track.
         self.lock = threading.Lock()
@@ -299,12 +320,23 @@ class KittingPicker:
     def _top(self, class_name: str) -> float:
         return self.cell.belt.height + PART_CLASSES[class_name].height
 
+    def _travel_estimate(self, start, hover) -> float:
+        """The parameters' estimate (s) of the move from ``start`` to ``hover``: two moves'
+        overhead and the travel at tool_speed."""
+        P = self.params
+        return 2 * P["move_overhead"] + float(np.linalg.norm(np.asarray(hover) - start)) / P["tool_speed"]
+
+    @property
+    def approach_scale(self) -> float:
+        """Measured / estimated approach time: the largest of the last picks' (1 before any)."""
+        return max(self.approach_ratios, default=1.0)
+
     def reach_time(self, start, point) -> float:
         """Estimated time (s) from the magnet at ``start`` to hovering above ``point`` and
-        descending onto it: two moves' overhead, the travel at tool_speed, the descent."""
-        P = self.params
-        hover = np.array([point[0], point[1], self.cell.belt.height + P["hover_height"]])
-        return 2 * P["move_overhead"] + float(np.linalg.norm(hover - start)) / P["tool_speed"] + self.descent_time
+        descending onto it: the travel estimate scaled by the measured approaches, the
+        descent."""
+        hover = np.array([point[0], point[1], self.cell.belt.height + self.params["hover_height"]])
+        return self.approach_scale * self._travel_estimate(start, hover) + self.descent_time
 
     # -- the cycle ---------------------------------------------------------------------------
     def tray_swapped(self):
@@ -424,12 +456,16 @@ class KittingPicker:
 
     def _pick_and_place(self, track: Track, t_grasp: float) -> KittingEvent:
         P = self.params
+        phases, lap = self._phase_timer()
         top = self._top(track.class_name)
         point = track.predict_position(t_grasp)
         velocity = track.velocity
         hover = np.r_[point - velocity * self.descent_time, top + P["hover_height"]]
         self._emit(track, "planned", f"intercept in {t_grasp - self.clock():.2f} s", np.r_[point, top])
+        estimate = self._travel_estimate(self._face_now(), hover)
         self._rise_then_move(hover)
+        took = lap("approach")
+        self.approach_ratios.append(min(max(took / max(estimate, 0.05), 0.2), 5.0))
         self._gripper(True)
         # Start the descent so that it ends when the part arrives (newest estimate).
         with self.lock:
@@ -448,28 +484,63 @@ class KittingPicker:
             raise PickDeferred(
                 f"deferred: the part was last seen {age:.2f} s ago (max_pose_age {P['max_pose_age']:g} s)"
             )
-        began = self.clock()
+        lap("wait")
         self._move_l(grasp, allowed_end=P["hover_height"] + 0.01, check_from=hover)
-        took = self.clock() - began
+        took = lap("descent")
         # Learn the descent time (the driver's timing, the machine's load): smoothed.
         self.descent_time = 0.7 * self.descent_time + 0.3 * min(max(took, 0.05), 5.0)
         lift = grasp + [0.0, 0.0, P["hover_height"]]
         self._move_l(lift, check_from=grasp)
+        lap("lift")
         lifted_at = self.clock()
-        unverified = ""
-        if P["verify_time"] > 0:
-            self.sleep(P["verify_time"])
-            if not self._image_since(lifted_at):
-                self.sleep(P["verify_time"])  # one more window: the vision may lag behind
-            if not self._image_since(lifted_at):
-                # Without an image the miss check cannot run: carry on (the part is most
-                # likely on the magnet) but say so, so that a campaign counts it apart.
-                unverified = "unverified: no camera image since the lift (is the camera registered?)"
-            elif self._still_on_belt(latest, track.class_name, lifted_at):
-                raise PickMissed("missed: the part is still on the belt after the lift")
+        # The part is taken as held from here (a stop during the carry keeps it on the
+        # magnet); the camera's miss check runs while the arm carries it away.
         self.holding = track
+        self._move_to(self._above_slot(track.class_name))
+        lap("carry")
+        unverified = self._miss_check(latest, track.class_name, lifted_at)
+        lap("check")
         self._emit(track, "picked", unverified, grasp, verified=not unverified)
-        return self.place_held(check=(latest, lifted_at) if unverified else None, seen=(latest, lifted_at))
+        return self.place_held(
+            check=(latest, lifted_at) if unverified else None, seen=(latest, lifted_at), phases=phases
+        )
+
+    def _phase_timer(self):
+        """(phases, lap): ``lap(name)`` stores the time since the previous lap (or since the
+        timer started) as phase ``name`` and returns it."""
+        phases = {}
+        mark = [self.clock()]
+
+        def lap(name: str) -> float:
+            now = self.clock()
+            phases[name] = now - mark[0]
+            mark[0] = now
+            return phases[name]
+
+        return phases, lap
+
+    def _miss_check(self, track: Track, class_name: str, lifted_at: float) -> str:
+        """After the carry: '' when the images taken since the lift show the part gone from
+        the belt; the reason the pick is unverified when no image came (the release then
+        looks for other evidence). Waits until ``verify_time`` has passed since the lift
+        (and once more without an image: the vision may lag behind). A part still on the
+        belt raises PickMissed (the magnet stays on: it may hold the part after all)."""
+        P = self.params
+        if P["verify_time"] <= 0:
+            return ""
+        left = lifted_at + P["verify_time"] - self.clock()
+        if left > 0:
+            self.sleep(left)
+        if not self._image_since(lifted_at):
+            self.sleep(P["verify_time"])
+        if not self._image_since(lifted_at):
+            # Without an image the miss check cannot run: carry on (the part is most
+            # likely on the magnet) but say so, so that a campaign counts it apart.
+            return "unverified: no camera image since the lift (is the camera registered?)"
+        if self._still_on_belt(track, class_name, lifted_at):
+            self.holding = None
+            raise PickMissed("missed: the part is still on the belt after the lift")
+        return ""
 
     def _image_since(self, since: float) -> bool:
         """Has an image taken after ``since`` been processed (with or without parts)?"""
@@ -484,19 +555,27 @@ class KittingPicker:
             recent = [(t, o) for t, o in self.recent if t > since and o.class_name == class_name]
         return any(math.hypot(o.x - p[0], o.y - p[1]) < radius for t, o in recent for p in [track.predict_position(t)])
 
-    def place_held(self, check=None, seen=None) -> KittingEvent:
+    def _above_slot(self, class_name: str) -> np.ndarray:
+        """The magnet face at transit height above the slot of ``class_name``."""
+        slot = self.cell.tray.slot_for(class_name)
+        return np.r_[slot.center[:2], self.cell.belt.height + self.params["transit_height"]]
+
+    def place_held(self, check=None, seen=None, phases=None) -> KittingEvent:
         """Carry the held part to its class's slot and release it there. ``check`` (track,
         lift time) for a pick the camera could not confirm: the evidence is looked at again
         above the slot, before the release. ``seen`` (track, lift time): after the release,
-        a sighting on the belt since the lift means the part never came."""
+        a sighting on the belt since the lift means the part never came. ``phases`` (the
+        pick's timed phases so far) gets the release's and goes with the final event."""
         P = self.params
         track = self.holding
         slot = self.cell.tray.slot_for(track.class_name)
         part = PART_CLASSES[track.class_name]
         floor = self.cell.tray.position[2]
-        above = np.r_[slot.center[:2], self.cell.belt.height + P["transit_height"]]
+        above = self._above_slot(track.class_name)
         release = np.r_[slot.center[:2], floor + P["place_height"] + part.height]
-        self._rise_then_move(above)
+        if float(np.linalg.norm(self._face_now() - above)) > 1e-3:  # not there after the carry
+            self._rise_then_move(above)
+        began = self.clock()
         held, evidence = self._pick_evidence(*check) if check is not None else (True, "")
         self._move_l(release)
         self._gripper(False)
@@ -504,14 +583,22 @@ class KittingPicker:
         with self.lock:
             self.filled.add(slot.part_class)  # whatever landed there, the slot is taken
         self._move_l(above)
+        if phases is not None:
+            phases["release"] = self.clock() - began
         problem = "" if held else evidence
         if not problem and self.part_present() is True:
             problem = "the part is still on the magnet after the release"
         if not problem and seen is not None and self._still_on_belt(seen[0], track.class_name, seen[1]):
             problem = "the part was seen on the belt after the lift: it never came to the slot"
         if problem:
-            return self._emit(track, "failed", f"not placed: {problem}", release, verified=False)
-        return self._emit(track, "placed", f"slot {slot.part_class}" + (f" ({evidence})" if evidence else ""), release)
+            return self._emit(track, "failed", f"not placed: {problem}", release, verified=False, phases=phases)
+        return self._emit(
+            track,
+            "placed",
+            f"slot {slot.part_class}" + (f" ({evidence})" if evidence else ""),
+            release,
+            phases=phases,
+        )
 
     def _pick_evidence(self, track: Track, lifted_at: float) -> tuple[bool, str]:
         """Above the slot: (is the unconfirmed part on the magnet, by what evidence / why not)."""
@@ -557,6 +644,18 @@ class KittingPicker:
         self.descent_time = min(max(took, 0.05), 5.0)
         return self.descent_time
 
+    def _move_to(self, face):
+        """MoveL of the magnet face to ``face`` in one straight move when the magnet is at
+        least ``hover_height`` above the belt and the tray floor and the straight path keeps
+        ``clearance`` (no stop on the way: the carry from the lift point); else straight up
+        first (``_rise_then_move``)."""
+        start = self._face_now()
+        clear = max(self.cell.belt.height, self.cell.tray.position[2]) + self.params["hover_height"]
+        if start[2] >= clear - 1e-3 and not check_segment(start, face, self.obstacles, self.params["clearance"]):
+            self._move_l(face, check_from=start)
+        else:
+            self._rise_then_move(face)
+
     def _rise_then_move(self, face):
         """MoveL of the magnet face to ``face``, straight up to its height first when below it
         (never sideways low over the belt or the tray)."""
@@ -572,7 +671,9 @@ class KittingPicker:
         for track_id in [k for k in self.records if k not in live]:
             del self.records[track_id]
 
-    def _emit(self, track: Track, event: str, reason: str = "", position=None, verified: bool = True) -> KittingEvent:
+    def _emit(
+        self, track: Track, event: str, reason: str = "", position=None, verified: bool = True, phases=None
+    ) -> KittingEvent:
         item = KittingEvent(
             track.track_id,
             track.class_name,
@@ -581,6 +682,7 @@ class KittingPicker:
             None if position is None else np.asarray(position, float),
             self.clock(),
             verified,
+            None if phases is None else dict(phases),
         )
         self.on_event(item)
         return item

@@ -415,10 +415,12 @@ def test_closed_loop_each_class_ends_in_its_slot(cell, class_name):
         assert (state.state, state.slot) == ("resting", class_name)
         # The magnet went on once (at the hover point) and off once (over the slot).
         assert [on for _, on in fake.gripper_calls] == [True, False]
-        # The pick happened inside the pick window.
+        # The pick happened inside the pick window (planned inside it on the track of the
+        # plan's time; the grasp is re-predicted from the newest sightings, which moves it
+        # by up to ~2 cm for a part planned as soon as it is confirmed).
         picked = next(e for e in events if e.event == "picked")
         x_min, x_max = picker.params["pick_window"]
-        assert x_min - 0.01 <= picked.position[0] <= x_max + 0.01
+        assert x_min - 0.02 <= picked.position[0] <= x_max + 0.02
         assert len(picker.cycle_times) == 1 and picker.cycle_times[0] > 0
     finally:
         sim.close()
