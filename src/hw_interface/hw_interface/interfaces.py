@@ -32,8 +32,11 @@ MOTION_CONTROLLER_SERVER = NodeInterface(
         ),
         Topic("motion_controller/stop_latched", _BOOL, "the latched stop", latched=True),
         Topic("motion_controller/gripper", _BOOL, "gripper state after each accepted SET_GRIPPER", latched=True),
-        Topic("frames/joint_states", "sensor_msgs/JointState", "joint_states around each recorded frame's instant"),
-        Topic("frames/tool_pose", "geometry_msgs/PoseStamped", "the tool pose around each recorded frame's instant"),
+        Topic(
+            "frames/state",
+            "motion_commander/FrameSample",
+            "the measured joints, their rate and the tool at each recorded frame's instant",
+        ),
     ),
     subscribes=(
         Topic(

@@ -13,8 +13,9 @@ shared with the kitting application):
 - ``teach_report``: the teach demo's placement error, summary and taught-path plot;
 - demonstrations recorded as LeRobot datasets: ``episode_frames`` (what a frame holds, made
   at a fixed rate from the newest value of each stream), ``frame_pacer`` (the frame clock,
-  which makes up the ticks a held-up recorder missed), ``stamped_history`` (the state, tool and command
-  at a frame's instant, between the messages stamped around it), ``episode_recorder`` (start, stop,
+  which makes up the ticks a held-up recorder missed), ``stamped_history`` (a stream's last messages by
+  stamp: the tapped values kept for their instants, the replay's tool poses),
+  ``skeleton_raw`` (a hand skeleton read from its bytes), ``episode_recorder`` (start, stop,
   discard, mark success, the start/stop gesture, the episode list), ``episode_writer_client``
   (the writer process, fed without blocking), ``episode_wire`` (the messages to it),
   ``lerobot_writer`` (that process: LeRobot's own writer, run in ``.venv-lerobot``),

@@ -106,6 +106,7 @@ class EpisodeFrames:
         self.gripper = 0.0
         self.hand = np.array([0, 0, 0, 0, 0, 0, 1, -1, -1, 0], dtype=np.float32)
         self.skeleton = np.zeros(len(SKELETON_NAMES), dtype=np.float32)
+        self._skeleton_index = None  # (names, their rows, their places in JOINT_NAMES)
         self.command = None
         self.target = None
         self.image = None
@@ -142,12 +143,15 @@ class EpisodeFrames:
         if not len(points):
             self.skeleton[-1] = 0.0
             return
-        values = np.zeros(len(SKELETON_NAMES), dtype=np.float32)
-        index = {name: i for i, name in enumerate(JOINT_NAMES)}
-        for name, point in zip(names, points):
-            i = index.get(name)
-            if i is not None:
-                values[3 * i : 3 * i + 3] = point
+        if self._skeleton_index is None or self._skeleton_index[0] != names:
+            index = {name: i for i, name in enumerate(JOINT_NAMES)}
+            given = [(k, index[name]) for k, name in enumerate(names) if name in index]
+            # the same names come with every skeleton of a device: their places, once
+            self._skeleton_index = (list(names), [k for k, _ in given], [i for _, i in given])
+        _, rows, places = self._skeleton_index
+        values = np.zeros((len(JOINT_NAMES) + 1, 3), dtype=np.float32)
+        values[places] = np.asarray(points, dtype=np.float64).reshape(-1, 3)[rows]
+        values = values.reshape(-1)[: len(SKELETON_NAMES)].copy()
         values[-1] = 1.0
         self.skeleton = values
 

@@ -159,7 +159,7 @@ EPISODE_RECORDER = NodeInterface(
         Topic(
             "frames/clock",
             "std_msgs/Float64",
-            "the frame period (s): the producers' frames/ taps forward their streams around its multiples",
+            "the frame period (s): the producers' frames/ taps send their streams at its multiples",
             latched=True,
         ),
         Topic(
@@ -170,8 +170,11 @@ EPISODE_RECORDER = NodeInterface(
         ),
     ),
     subscribes=(
-        Topic("frames/joint_states", "sensor_msgs/JointState", "the measured joints around each frame's instant"),
-        Topic("frames/tool_pose", _POSE, "the measured tool pose around each frame's instant"),
+        Topic(
+            "frames/state",
+            "motion_commander/FrameSample",
+            "the measured joints, their rate and the tool at each frame's instant (the server's tap)",
+        ),
         Topic("motion_controller/gripper", "std_msgs/Bool", "the gripper state"),
         Topic("frames/hand", "motion_sensor/hand", "the operator's hand around each frame's instant"),
         Topic(
@@ -180,8 +183,11 @@ EPISODE_RECORDER = NodeInterface(
             "the operator's hand skeleton around each frame's instant (devices that see fingers)",
             optional=True,
         ),
-        Topic("frames/command", "sensor_msgs/JointState", "the joint targets sent (the action) around each instant"),
-        Topic("frames/target", _POSE, "the core's tool target around each frame's instant"),
+        Topic(
+            "frames/command",
+            "motion_commander/FrameSample",
+            "the joint targets sent (the action) and the core's tool target at each frame's instant",
+        ),
         Topic("camera/image_raw", "sensor_msgs/Image", "the camera (with ~camera)", optional=True),
         Topic("episodes/task", "std_msgs/String", "task text of the next episodes"),
         Topic("episodes/command", "std_msgs/String", "start, stop, discard, success, failure (for scripts)"),

@@ -1,48 +1,22 @@
-"""The last few messages of a stamped stream, and its value at a given time (plain Python:
-the recorder node feeds it, tests feed it directly).
+"""The last few messages of a stamped stream, and where a given time lies among them (plain
+Python: the recorder node and the replay feed it, tests feed it directly).
 
 A recorded frame stands for one instant, yet the newest message of a 100 Hz stream is
-anywhere from 0 to 10 ms old when a frame is made, and the newest command 0-9 ms: at the
-tool's 0.6 m/s in the teach demo, up to 6 mm between the recorded state and the recorded
-action of one frame, which a replay cannot reproduce. So the recorder makes each frame a
-little after its instant (``delay``) and takes the measured joints, the tool and the
-core's command and target at that instant, linearly between the two messages stamped
-around it (the stamps are the driver's sample time and the hand frame's time; quaternions
-normalised after the blend). A stream with nothing after the instant (idle, or late) gives
-its newest value before it; one with nothing before gives its oldest.
+anywhere from 0 to 10 ms old when a frame is made: at the tool's 0.6 m/s in the teach demo,
+up to 6 mm between the recorded state and the recorded action of one frame, which a replay
+cannot reproduce. So the producers send their value at each frame's instant, blended
+between their two samples stamped around it (``motion_common.frame_blend``, whose
+``blend`` and ``rate_between`` are also here), and the recorder keeps those messages by
+stamp and takes the one for its instant; the replay blends the server's stamped tool poses
+at the moment each frame's targets go out. A stream with nothing after the instant (idle,
+or late) gives its newest value before it; one with nothing before gives its oldest.
 """
 
 from collections import deque
 
-import numpy as np
+from motion_common.frame_blend import blend, rate_between
 
 __all__ = ["StampedHistory", "blend", "rate_between"]
-
-
-def blend(before: np.ndarray, after: np.ndarray, u: float, quaternion: slice | None = None) -> np.ndarray:
-    """``before`` + u (``after`` - ``before``); the ``quaternion`` part normalised, with
-    ``after`` flipped to ``before``'s hemisphere first."""
-    before = np.asarray(before, dtype=np.float64)
-    after = np.asarray(after, dtype=np.float64)
-    if quaternion is not None and float(np.dot(before[quaternion], after[quaternion])) < 0:
-        after = after.copy()
-        after[quaternion] = -after[quaternion]
-    out = before + (after - before) * u
-    if quaternion is not None:
-        norm = np.linalg.norm(out[quaternion])
-        if norm > 0:
-            out[quaternion] = out[quaternion] / norm
-    return out
-
-
-def rate_between(before: np.ndarray, after: np.ndarray, stamp_before: float, stamp_after: float) -> np.ndarray:
-    """(``after`` - ``before``) per second between two stamped samples: the velocity a
-    stream without one (a driver's joint_states carry positions only) had between them;
-    zeros when both are the same sample (an end of the history)."""
-    before = np.asarray(before, dtype=np.float64)
-    after = np.asarray(after, dtype=np.float64)
-    dt = float(stamp_after) - float(stamp_before)
-    return (after - before) / dt if dt > 0 else np.zeros_like(after)
 
 
 class StampedHistory:

@@ -36,8 +36,11 @@ MOTION_COMMANDER = NodeInterface(
             latched=True,
         ),
         Topic("motion_commander/speed_ratio", "std_msgs/Float64", "the speed ratio in force", latched=True),
-        Topic("frames/command", "sensor_msgs/JointState", "the joint targets around each recorded frame's instant"),
-        Topic("frames/target", _POSE, "the tool target around each recorded frame's instant"),
+        Topic(
+            "frames/command",
+            "motion_commander/FrameSample",
+            "the joint targets and the tool target at each recorded frame's instant",
+        ),
     ),
     subscribes=(
         Topic(

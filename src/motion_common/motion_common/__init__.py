@@ -30,8 +30,11 @@ layering. Its modules, by role:
   libraries print to the file descriptors, silenced around known-noisy start-up calls),
   ``quiet_pybullet`` (pybullet imported and connected without its console chatter), ``session_end`` (a finishing node
   stops the hand-started roslaunch that runs it, without the REQUIRED banner);
-- recording: ``frame_tap`` (a fast stamped stream thinned to the two messages around each
-  of a dataset recorder's frame instants, published by the stream's own node);
+- recording: ``frame_tap`` (a fast stamped stream thinned to what a dataset recorder's
+  frame instants need, published by the stream's own node: the messages around each
+  instant, or one value at it), ``frame_blend`` (a stream's value at an instant between
+  two stamped samples), ``frame_sample`` (that value as the one message a frame the server
+  and the core send);
 - ``errors``: ``RobotModelError``, ``ParameterError``.
 
 The names in ``__all__`` are imported from their module on first use, so ``import
@@ -60,6 +63,7 @@ _PUBLIC = {
     "multiply_quaternions": "rotations",
     "with_positive_w": "rotations",
     "FrameTap": "frame_tap",
+    "FrameSampler": "frame_sample",
     "Intrinsics": "camera_model",
     "PinholeCamera": "camera_model",
     "CameraInfoError": "camera_model",

@@ -9,8 +9,11 @@ are used. So the producer offers a tap: of the messages it publishes anyway, the
 forwards only the two around each multiple of the period (the last stamped at or before
 it and the first after it), ~2 per frame instead of ~10, and nothing while no one listens
 or the period is unknown. A stream the recorder takes as it is, not blended
-(``pairs=False``: the hand), needs only the first message after each multiple. The
-recorder announces the period (``FrameTap.period``).
+(``pairs=False``: the hand), needs only the first message after each multiple. A producer
+that can blend its own samples (``at_instant``: the server's joints and tool, the core's
+command and target, ``motion_common.frame_blend``) sends one message a frame instead: its
+value at the instant, stamped with it, made from the two samples around it. The recorder
+announces the period (``FrameTap.period``).
 """
 
 import math
@@ -23,12 +26,15 @@ class FrameTap:
     """Forwards (``publish``) the messages of a stamped stream around each multiple of
     ``period`` s, while ``connected()``."""
 
-    def __init__(self, publish, connected, period: float | None = None, pairs: bool = True):
+    def __init__(self, publish, connected, period: float | None = None, pairs: bool = True, at_instant=None):
         self._publish = publish
         self._connected = connected
         self.period = period
         self.pairs = pairs
-        self._last = None  # [bucket, message, forwarded] of the previous message
+        # at_instant(stamp before, sample before, stamp after, sample after, instant) -> the
+        # one message sent for the instant (None: the samples themselves are sent)
+        self.at_instant = at_instant
+        self._last = None  # [bucket, message, forwarded, stamp] of the previous message
         self._lock = threading.Lock()  # a stream may be fed from two threads
 
     def add(self, stamp: float, message) -> int:
@@ -44,10 +50,14 @@ class FrameTap:
         bucket = math.floor(stamp / period)
         last, sent = self._last, 0
         if last is not None and bucket > last[0]:  # a multiple of the period lies in (last, stamp]
+            if self.at_instant is not None:  # the newest multiple, when the message came after a gap
+                self._publish(self.at_instant(last[3], last[1], stamp, message, bucket * period))
+                self._last = [bucket, message, True, stamp]
+                return 1
             if self.pairs and not last[2]:
                 self._publish(last[1])
                 sent += 1
             self._publish(message)
             sent += 1
-        self._last = [bucket, message, sent > 0]
+        self._last = [bucket, message, sent > 0, stamp]
         return sent

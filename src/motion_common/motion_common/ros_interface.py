@@ -83,11 +83,12 @@ def service_proxy(node: NodeInterface, name: str, **kwargs) -> rospy.ServiceProx
 FRAME_CLOCK = "frames/clock"
 
 
-def frame_taps(node: NodeInterface, names, pairs: bool = True) -> dict:
+def frame_taps(node: NodeInterface, names, pairs: bool = True, at_instant=None) -> dict:
     """A ``FrameTap`` for each declared tap topic in ``names`` (``frames/<stream>``), all
     following the period latched on ``frames/clock``; feed each with ``add(stamp, msg)``
     right where the stream itself is published. ``pairs=False``: the first message after
-    each frame's instant only (a stream the recorder takes as it is)."""
+    each frame's instant only (a stream the recorder takes as it is). ``at_instant``: one
+    message a frame, made by it from the two samples around the instant (``FrameTap``)."""
     taps = {}
     for name in names:
         pub = publisher(node, name, queue_size=4)
@@ -95,6 +96,7 @@ def frame_taps(node: NodeInterface, names, pairs: bool = True) -> dict:
             lambda msg, pub=pub: _publish_unless_closing(pub, msg),
             lambda pub=pub: pub.get_num_connections() > 0,
             pairs=pairs,
+            at_instant=at_instant,
         )
 
     def on_clock(msg):

@@ -63,3 +63,32 @@ def test_without_pairs_only_the_first_message_after_each_multiple():
     for stamp in (0.071, 0.081, 0.091, 0.101, 0.111, 0.191, 0.201, 0.211):
         tap.add(stamp, stamp)
     assert sent == [0.101, 0.201]
+
+
+def test_one_message_a_frame_holds_the_whole_streams_value_at_each_instant():
+    # The server and the core blend their own samples at each instant (motion_common.
+    # frame_blend.sample_at): one message a frame, equal to the recorder's blend of the
+    # whole stream at that instant, and stamped with it.
+    from motion_common.frame_blend import blend, rate_between, sample_at
+
+    rng = np.random.default_rng(5)
+    stamps = np.cumsum(rng.uniform(0.006, 0.014, 400)) + 1000.0
+
+    def sample(t):
+        q = np.array([0.0, np.sin(t), 0.0, np.cos(t)])
+        return np.array([np.sin(3 * t), np.cos(2 * t)]), np.concatenate([[t, 2 * t, -t], q])
+
+    sent = []
+    tap = FrameTap(sent.append, lambda: True, 1 / 15, at_instant=lambda *args: (args[-1], sample_at(*args)))
+    whole = StampedHistory(maxlen=2000)
+    for stamp in stamps:
+        whole.add(stamp, sample(stamp))
+        tap.add(stamp, sample(stamp))
+    first = int(np.ceil(stamps[0] * 15))
+    assert len(sent) == int(stamps[-1] * 15) - first + 1  # one a frame
+    for k, (instant, (joints, velocity, pose)) in enumerate(sent, start=first):
+        assert instant == k * (1 / 15)
+        (t0, (j0, p0)), (t1, (j1, p1)), u = whole.around(instant)
+        np.testing.assert_allclose(joints, blend(j0, j1, u), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(pose, blend(p0, p1, u, quaternion=slice(3, 7)), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(velocity, rate_between(j0, j1, t0, t1), rtol=0, atol=1e-9)
