@@ -20,8 +20,9 @@ start-up, torch imported once, and the episode's save included), and in the stea
 seconds, with the session length at which the whole session's extra CPU reaches the 5 %
 goal. The default session is ~65 s (12 passes); a lab's recording session is longer.
 
-Run: bench/run recording_cost [--rounds 2] [--recording test-paddle-rightwards] [--repeat 12] [--camera]
-Writes bench/results/recording_cost.json and bench/results/recording_cost.png.
+Run: bench/run recording_cost [--rounds 2] [--recording test-paddle-rightwards] [--repeat 12] [--camera] [--fps 10]
+Writes bench/results/recording_cost.json and bench/results/recording_cost.png (at another
+``--fps``, recording_cost_fps<N>.json and .png).
 """
 
 import argparse
@@ -148,13 +149,13 @@ def _children_cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def run_session(recording: str, repeat: int, record: bool, camera: bool, window: tuple) -> dict:
+def run_session(recording: str, repeat: int, record: bool, camera: bool, window: tuple, fps: float = 10.0) -> dict:
     """One teleop session; its summary plus cpu_s and wall_s (and the episode, if recorded)."""
     out = tempfile.mkdtemp(prefix="rec-cost-")
     args = [f"recording:={os.path.join(ROOT, 'tests', 'data', recording + '.jsonl.gz')}", f"repeat:={repeat}"]
     dataset = os.path.join(out, "dataset")
     if record:
-        args += [f"dataset:={dataset}", "dataset_start:=true"]
+        args += [f"dataset:={dataset}", "dataset_start:=true", f"dataset_fps:={fps:g}"]
         if camera:
             args += ["dataset_camera:=scene"]
     sampler = ProcessSampler()
@@ -285,7 +286,9 @@ def main():
     parser.add_argument("--camera", action="store_true", help="record the simulated scene camera too")
     parser.add_argument("--steady-from", type=float, default=20.0, help="steady window's start in a session (s)")
     parser.add_argument("--steady-s", type=float, default=30.0, help="steady window's length (s)")
+    parser.add_argument("--fps", type=float, default=10.0, help="the episodes' frame rate (default 10)")
     args = parser.parse_args()
+    name = "recording_cost" if args.fps == 10.0 else f"recording_cost_fps{args.fps:g}"
     window = (args.steady_from, args.steady_s)
     rounds = []
     for index in range(args.rounds):
@@ -293,7 +296,7 @@ def main():
         for record in (False, True):
             label = "on" if record else "off"
             print(f"[round {index + 1}/{args.rounds}] recording {label}...", flush=True)
-            pair[label] = run_session(args.recording, args.repeat, record, args.camera, window)
+            pair[label] = run_session(args.recording, args.repeat, record, args.camera, window, args.fps)
             row = pair[label]
             print(
                 f"    p50 {row['latency_p50_ms']} ms, p99 {row['latency_p99_ms']} ms, CPU {row['cpu_s']} s "
@@ -307,8 +310,9 @@ def main():
     startup = writer_startup_cpu_s()
     print(f"LeRobot writer start-up alone: {startup:.1f} CPU s", flush=True)
     results = summarise(args, rounds, startup)
-    write_results("recording_cost", results, show=False)
-    png = os.path.join(RESULTS, "recording_cost.png")
+    results["fps"] = args.fps
+    write_results(name, results, show=False)
+    png = os.path.join(RESULTS, f"{name}.png")
     plot(results, png)
     median, steady = results["median"], results["steady_cores_by_process"]
     spread = results["p50_spread_off_ms"]
