@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import lsq_linear
 
 from motion_common.float_list import float_list
 from motion_common.kinematics import singular_values
@@ -42,7 +43,17 @@ class JointStepLimiter:
     scale only makes it lag along the path. With an acceleration limit the step is also
     kept slow enough to stop AT the target (braking_speed): a command catching up with a
     hand that reverses brakes in time instead of running past the reversal point.
+
+    When the acceleration limit binds and the caller gives the tool's Jacobian, the step is
+    the one within every joint's acceleration (and speed) bounds that keeps the tool's
+    position closest to the intended step, the orientation weighted by
+    ``ROTATION_WEIGHT_M`` (scipy's bounded least squares): scaling every joint's change of
+    velocity by one factor would let a wrist that turns hard (a real hand's orientation is
+    noisy) hold back the joints that carry the position, and the tool would run past a hand
+    that stops.
     """
+
+    ROTATION_WEIGHT_M = 0.05  # m of tool position worth one rad of orientation, where they conflict
 
     def __init__(
         self, velocity_limits, scale: float = 0.5, acceleration_limit=None, min_dt: float = 0.002, max_dt: float = 0.05
@@ -175,13 +186,34 @@ class JointStepLimiter:
                 ratio = max(ratio, step / (limit * scale) if scale > 0.0 else float("inf"))
         return ratio
 
-    def limit(self, previous, target, dt: float, speed_fraction: float = 1.0, goal=None, ratio=None):
+    def braking_fraction(self, previous, target, goal, dt: float, speed_fraction: float = 1.0) -> float:
+        """Largest f in [0, 1] for which every joint's step f (target - previous) that moves
+        toward ``goal`` stays able to stop at the goal (braking_speed, the goal's own motion
+        counted as in overshoot()). For a step that must keep its direction (the tool
+        position's): scaled down, the tool stays on its path and still stops in time.
+        Joints whose goal is already coming back do not count (see below)."""
+        previous, target, goal = float_list(previous), float_list(target), float_list(goal)
+        if self.max_acceleration is None:
+            return 1.0
+        brakes = self._max_steps(previous, goal, self._clamped_dt(dt), speed_fraction)
+        fraction = 1.0
+        for p, t, g, brake in zip(previous, target, goal, brakes):
+            step, toward = t - p, g - p
+            # A joint whose goal is already coming back (no room: brake 0) would hold the
+            # whole position still; it is left to the acceleration limit, as before.
+            if brake > 0.0 and step * toward > 0.0 and abs(step) > brake:
+                fraction = min(fraction, brake / abs(step))
+        return fraction
+
+    def limit(self, previous, target, dt: float, speed_fraction: float = 1.0, goal=None, ratio=None, jacobian=None):
         """Return (command, limited): previous moved toward target within the limits.
 
         ``speed_fraction`` in [0, 1] scales the velocity limit (ramps, singularity slow-down).
         ``goal`` is where the motion must be able to stop (default: target); the core
         passes the frame's full IK target when ``target`` is a partial step toward it.
         ``ratio`` is this same step's ``overshoot()``, when the caller has computed it.
+        ``jacobian``: a callable giving the 6 x n tool Jacobian at ``previous`` (linear rows
+        first), called only when the acceleration limit binds (see the class).
         """
         previous = float_list(previous)
         step = [t - p for t, p in zip(float_list(target), previous)]
@@ -196,10 +228,33 @@ class JointStepLimiter:
             dv = [s / dt - v for s, v in zip(step, previous_velocity)]
             excess = max(abs(d) for d in dv) / (self.max_acceleration * dt)
             if excess > 1.0:
-                step = [(v + d / excess) * dt for v, d in zip(previous_velocity, dv)]
+                if jacobian is None:
+                    step = [(v + d / excess) * dt for v, d in zip(previous_velocity, dv)]
+                else:
+                    step = self._closest_tool_step(step, previous_velocity, dt, speed_fraction, jacobian())
                 limited = True
         self._velocity = [s / dt for s in step]
         return np.array([p + s for p, s in zip(previous, step)]), limited
+
+    def _closest_tool_step(self, step, previous_velocity, dt: float, speed_fraction: float, jacobian) -> list:
+        """The joint step within each joint's acceleration bounds (and its speed bounds,
+        where the two overlap) whose tool motion is closest to that of ``step``."""
+        velocity = np.asarray(previous_velocity, dtype=float)
+        change = self.max_acceleration * dt * dt
+        lower, upper = velocity * dt - change, velocity * dt + change
+        speed = np.asarray(self._max_velocity) * (max(speed_fraction, 0.0) * dt)
+        # A joint already faster than a speed cap that just dropped (a ramp, a singularity)
+        # slows down at the acceleration limit: its bounds are then the acceleration's alone.
+        capped_lower, capped_upper = np.maximum(lower, -speed), np.minimum(upper, speed)
+        overlap = capped_lower <= capped_upper
+        lower = np.where(overlap, capped_lower, lower)
+        upper = np.where(overlap, capped_upper, upper)
+        weights = np.array([1.0, 1.0, 1.0] + [self.ROTATION_WEIGHT_M] * 3)[:, None]
+        # The small identity rows make the solution unique where the Jacobian is not.
+        design = np.vstack([weights * np.asarray(jacobian, dtype=float), 1e-3 * np.eye(len(step))])
+        wanted = np.asarray(step, dtype=float)
+        solved = lsq_linear(design, design @ wanted, bounds=(lower, np.nextafter(upper, np.inf)), method="bvls").x
+        return np.clip(solved, lower, upper).tolist()
 
 
 class JointLimitMargin:

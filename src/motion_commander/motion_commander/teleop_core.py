@@ -376,12 +376,15 @@ class TeleopCore:
         """
         limiter = self.limiter
         held = self._partial_step(target_position, target_rotation, 1.0, 0.0, self._command)
+        reach = 1.0  # the fraction of the way to the target position this step takes
+        if held is not None:
+            held, reach = self._braked_position_step(held, target_position, target_rotation, goal, dt, speed)
         fraction = None if held is None else limiter.fraction_within(self._command, held, goal, dt, speed)
         if fraction is not None:
             joints = held
             if fraction > 0.0:
                 seed = np.array([h + fraction * (g - h) for h, g in zip(held.tolist(), goal.tolist())])
-                solved = self._partial_step(target_position, target_rotation, 1.0, fraction, seed)
+                solved = self._partial_step(target_position, target_rotation, reach, fraction, seed)
                 joints = held if solved is None else solved
             # Checked for speed alone (and acceleration by limit()): the braking at the goal
             # is already in the fraction, and the position step may run past the goal.
@@ -396,6 +399,26 @@ class TeleopCore:
         seed = np.array([c + fraction * (g - c) for c, g in zip(self._command.tolist(), goal.tolist())])
         joints = self._partial_step(target_position, target_rotation, fraction, fraction, seed)
         return (goal if joints is None else joints), goal, None
+
+    def _braked_position_step(self, held, target_position, target_rotation, goal, dt, speed):
+        """(joints, fraction): ``held`` (the whole position step, fraction 1), or the part of
+        it along the same path from which every joint moving toward the goal can still stop
+        there.
+
+        A command catching up with a hand that then stops dead must not arrive at a speed the
+        joints' acceleration limit cannot take off in time: it would run past the hand's
+        turning point. Scaled along the Cartesian path (re-solved, twice at most: the joint
+        steps are nearly linear in the fraction), the tool stays on the hand's path."""
+        reach, fraction = 1.0, self.limiter.braking_fraction(self._command, held, goal, dt, speed)
+        for _ in range(2):
+            if fraction >= 1.0:
+                break
+            braked = self._partial_step(target_position, target_rotation, reach * fraction, 0.0, self._command)
+            if braked is None:
+                break
+            held, reach = braked, reach * fraction
+            fraction = self.limiter.braking_fraction(self._command, held, goal, dt, speed)
+        return held, reach
 
     def _command_for(self, stamp, now, position, orientation) -> TeleopCommand | None:
         flags = []
@@ -439,12 +462,19 @@ class TeleopCore:
         # target is already coming back): the position step is still taken, and only what
         # cannot move waits, instead of the whole arm standing still and lurching after.
         partial = overshoot > 1.0
+        previous = self._command
+
+        def jacobian():  # computed only on the frames where the acceleration limit binds
+            return self.kinematics.jacobian(previous)
+
         if partial:
             joints, stop, ratio = self._limited_step(target_position, target_rotation, overshoot, goal, dt, speed)
-            joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=stop, ratio=ratio)
+            joints, limited = self.limiter.limit(previous, joints, dt, speed, goal=stop, ratio=ratio, jacobian=jacobian)
             limited = True  # the step is short of the target either way
         else:  # the step to the IK target itself: its overshoot is known
-            joints, limited = self.limiter.limit(self._command, joints, dt, speed, goal=goal, ratio=overshoot)
+            joints, limited = self.limiter.limit(
+                previous, joints, dt, speed, goal=goal, ratio=overshoot, jacobian=jacobian
+            )
         if limited and not flags:
             flags.append(TeleopStatus.JOINT_SPEED_LIMITED)
         # The condition number at the new command is known when it is the IK target itself;
