@@ -7,7 +7,8 @@ Writes bench/results/<name>.json (success_rate, kit score (ARIAC's kitting score
 over the kits), misses (parts that rode off the belt unpicked), pose_error_mm_p50/p95 =
 belt-plane distance between each vision pose and the simulator's true pose at the image's
 stamp, picks_per_minute, arrival rate, spawn-to-place times, physics real-time factor,
-per-class table, every part and kit) and bench/results/<name>_confusion.png. The
+per-class table, every part and kit, where the pick cycle goes: cycle_phases_s, each
+phase's p50/mean/p95 over the placing picks) and bench/results/<name>_confusion.png. The
 session's full log goes to bench/results/<name>.log. A run that ends without a summary
 writes nothing.
 
@@ -104,9 +105,9 @@ def run_campaign(args, feed: str, rate: float, name: str) -> dict | None:
             for line in process.stdout:
                 log.write(line)
                 # The trials' own lines (progress bar, kits, table, summary) go to the screen.
-                if line.startswith(("[#", "[ ", "kitting_trials", "class ", "success ", "  failed", "  kit ")) or (
-                    line.split(" ")[0] in CLASSES
-                ):
+                if line.startswith(
+                    ("[#", "[ ", "kitting_trials", "class ", "success ", "cycle ", "  failed", "  kit ")
+                ) or (line.split(" ")[0] in CLASSES):
                     print(line, end="", flush=True)
             code = process.wait()
         except KeyboardInterrupt:
@@ -221,6 +222,7 @@ def main(argv=None) -> int:
                     "misses": summary["misses"],
                     "trials": summary["trials"],
                     "kit_score_rate": summary.get("kit_score_rate"),
+                    "cycle_s_p50": summary.get("cycle_phases_s", {}).get("cycle", {}).get("p50"),
                     "failures": [f["reason"] or f["state"] for f in summary["failures"]],
                 }
             )
