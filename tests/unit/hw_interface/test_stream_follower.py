@@ -2,6 +2,7 @@
 whatever the client sends, no overshoot beyond rounding, and a stop when the stream stops."""
 
 import numpy as np
+import pytest
 
 from hw_interface.stream_follower import StreamFollower
 
@@ -85,3 +86,16 @@ def test_brake_stops_at_rest_within_the_acceleration_limit():
     assert np.max(np.abs(acceleration)) <= 200.0 + 1e-6
     assert follower.at_rest
     assert path[-1][0] - path[0][0] <= moving[0] ** 2 / (2 * 200.0) + 1e-6
+
+
+def test_a_joint_that_must_stop_is_not_held_back_by_a_wrist_turning_hard():
+    # Joint 0 moves at 1 rad/s with 5.5 mrad left to its goal: at 100 rad/s^2 it can just
+    # stop there (5 mrad). The wrist, at 3 rad/s, is sent back hard at the same time. One
+    # factor for every joint's change of velocity let joint 0 brake only as hard as the
+    # wrist's share allowed, and it ran past its goal.
+    follower = StreamFollower([10.0, 10.0], [0.0, 0.0], acceleration=100.0)
+    follower.velocity = np.array([1.0, 3.0])
+    follower.set_goal([0.0055, -0.5])
+    furthest = max(float(follower.step(0.002)[0]) for _ in range(200))
+    assert furthest <= 0.0055 + 1e-4, f"joint 0 ran {1e3 * (furthest - 0.0055):.2f} mrad past its goal"
+    assert follower.setpoint[0] == pytest.approx(0.0055, abs=1e-4)
