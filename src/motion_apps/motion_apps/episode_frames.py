@@ -19,7 +19,12 @@ LeRobot features (float32 unless said):
 - ``tool_target``: the core's tool target pose, x y z qx qy qz qw; before the first,
   the measured tool pose. The action in tool space, kept outside LeRobot's ``action*``
   names on purpose: LeRobot's policies take every feature whose name starts with
-  ``action`` as an output, and most predict one (``action``).
+  ``action`` as an output, and most predict one (``action``);
+- ``command_velocity``: the rate of the core's joint commands at the frame's instant
+  (rad/s, between the two commands around it); before the first command, the measured
+  velocities. The action's own velocity (outside ``action*`` for the same reason): the
+  commands run at the hand's ~110 Hz, and what they did between two frames shows in it
+  (a replay's curve between the frames takes it as its tangents).
 
 A frame is made at each tick of the recorder's clock from the latest value given for every
 stream, so all frames are ``1 / fps`` apart (LeRobot's timestamps are ``index / fps``); the
@@ -108,6 +113,7 @@ class EpisodeFrames:
         self.skeleton = np.zeros(len(SKELETON_NAMES), dtype=np.float32)
         self._skeleton_index = None  # (names, their rows, their places in JOINT_NAMES)
         self.command = None
+        self.command_velocity = None
         self.target = None
         self.image = None
         self._image_serial = 0
@@ -155,10 +161,13 @@ class EpisodeFrames:
         values[-1] = 1.0
         self.skeleton = values
 
-    def on_command(self, names, positions) -> None:
+    def on_command(self, names, positions, velocities=()) -> None:
+        """The core's joint command and, when given, its rate (rad/s)."""
         if self.joint_names is not None and list(names) and list(names) != self.joint_names:
             return
         self.command = np.asarray(positions, dtype=np.float32)
+        v = np.asarray(velocities, dtype=np.float32)
+        self.command_velocity = v if v.shape == self.command.shape else np.zeros_like(self.command)
 
     def on_target(self, position, quaternion) -> None:
         self.target = np.asarray(list(position) + list(quaternion), dtype=np.float32)
@@ -202,6 +211,7 @@ class EpisodeFrames:
             },
             "action": {"dtype": "float32", "shape": [len(with_gripper)], "names": with_gripper},
             "tool_target": {"dtype": "float32", "shape": [7], "names": POSE_NAMES},
+            "command_velocity": {"dtype": "float32", "shape": [len(joints)], "names": joints},
         }
         if self.camera:
             h, w = self.image.shape[:2] if self.image is not None else self.image_size[::-1]
@@ -222,7 +232,8 @@ class EpisodeFrames:
             self.counts.skipped_not_ready += 1
             return None
         gripper = np.array([self.gripper], dtype=np.float32)
-        joints_target = self.command if self.command is not None else self.joints
+        commanded = self.command is not None
+        joints_target = self.command if commanded else self.joints
         frame = {
             "observation.state": np.concatenate([self.joints, gripper]),
             "observation.velocity": self.velocities.copy(),
@@ -231,6 +242,7 @@ class EpisodeFrames:
             "observation.hand_skeleton": self.skeleton.copy(),
             "action": np.concatenate([joints_target, gripper]),
             "tool_target": (self.target if self.target is not None else self.tool).copy(),
+            "command_velocity": (self.command_velocity if commanded else self.velocities).copy(),
         }
         if self.camera:
             if self.image is None:

@@ -87,20 +87,38 @@ class EpisodeReplay:
         self.settle_s = settle_s
 
     @staticmethod
-    def _curve(targets: np.ndarray, i: int, u: float) -> np.ndarray:
-        """Catmull-Rom between frame ``i``'s and ``i + 1``'s targets at ``u`` in [0, 1]; the
-        ends extended in a straight line (a straight path stays straight)."""
-        last = len(targets) - 1
-        p1, p2 = targets[i], targets[min(i + 1, last)]
-        p0 = targets[i - 1] if i > 0 else 2 * p1 - p2
-        p3 = targets[i + 2] if i + 2 <= last else 2 * p2 - p1
-        return 0.5 * (
-            2 * p1 + (p2 - p0) * u + (2 * p0 - 5 * p1 + 4 * p2 - p3) * u * u + (3 * p1 - p0 - 3 * p2 + p3) * u * u * u
+    def catmull_rom_tangents(targets: np.ndarray) -> np.ndarray:
+        """Each frame's tangent (a change per frame) of the Catmull-Rom curve through the
+        targets: half the change from the frame before to the frame after; the ends
+        extended in a straight line (a straight path stays straight)."""
+        tangents = np.empty_like(targets)
+        if len(targets) < 2:
+            return np.zeros_like(targets)
+        tangents[1:-1] = 0.5 * (targets[2:] - targets[:-2])
+        tangents[0] = targets[1] - targets[0]
+        tangents[-1] = targets[-1] - targets[-2]
+        return tangents
+
+    @staticmethod
+    def _curve(targets: np.ndarray, tangents: np.ndarray, i: int, u: float) -> np.ndarray:
+        """The cubic Hermite curve between frame ``i``'s and ``i + 1``'s targets at ``u`` in
+        [0, 1], with the frames' ``tangents`` (a change per frame)."""
+        j = min(i + 1, len(targets) - 1)
+        u2, u3 = u * u, u * u * u
+        return (
+            (2 * u3 - 3 * u2 + 1) * targets[i]
+            + (u3 - 2 * u2 + u) * tangents[i]
+            + (3 * u2 - 2 * u3) * targets[j]
+            + (u3 - u2) * tangents[j]
         )
 
-    def run(self, states: np.ndarray, actions: np.ndarray, tool_poses: np.ndarray, tool_at=None) -> ReplayReport:
+    def run(
+        self, states: np.ndarray, actions: np.ndarray, tool_poses: np.ndarray, tool_at=None, velocities=None
+    ) -> ReplayReport:
         """``states`` and ``actions``: joints then gripper per frame; ``tool_poses``: x y z
-        qx qy qz qw per frame, as recorded; ``tool_at``: see the module's docstring."""
+        qx qy qz qw per frame, as recorded; ``tool_at``: see the module's docstring;
+        ``velocities``: the measured joint velocities per frame (rad/s), the curve's
+        tangents at the frames (None: Catmull-Rom's)."""
         if not (len(states) == len(actions) == len(tool_poses)) or len(states) == 0:
             raise ValueError(
                 f"episode arrays differ in length or are empty: {len(states)}, {len(actions)}, {len(tool_poses)}"
@@ -112,6 +130,12 @@ class EpisodeReplay:
         self.client.set_gripper(gripper)
         self.sleep(self.settle_s)
         joints = np.asarray(actions[:, :dof], dtype=np.float64)
+        if velocities is None:
+            tangents = self.catmull_rom_tangents(joints)
+        else:
+            tangents = np.asarray(velocities, dtype=np.float64)[:, :dof] * self.period
+            if tangents.shape != joints.shape:
+                raise ValueError(f"velocities of shape {np.shape(velocities)} for {joints.shape} joint targets")
         pending = []  # (frame, moment its targets were sent) not measured yet (tool_at)
         start = self.clock()
         for i, action in enumerate(actions):
@@ -126,7 +150,7 @@ class EpisodeReplay:
             for k in range(self.substeps if i + 1 < len(actions) else 1):
                 if k:
                     self._wait_until(start + (i + k / self.substeps) * self.period)
-                target = self._curve(joints, i, k / self.substeps) if k else joints[i]
+                target = self._curve(joints, tangents, i, k / self.substeps) if k else joints[i]
                 try:
                     self.client.set_joints([float(v) for v in target])
                 except Exception as exc:  # noqa: BLE001 - the server's refusal ends the replay, reported

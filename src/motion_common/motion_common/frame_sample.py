@@ -16,7 +16,8 @@ __all__ = ["FrameSampler"]
 class FrameSampler:
     """``FrameTap``'s ``at_instant`` for samples ``(joints, pose x y z qx qy qz qw)`` of the
     joints ``names``, as ``message`` (FrameSample's class); ``rate``: the joints' rate
-    between the samples goes out too (the measured joints; not the commands)."""
+    between the samples goes out too (the measured joints' velocity, the commands' own
+    rate)."""
 
     def __init__(self, message, names, rate: bool = True):
         self.message = message

@@ -357,3 +357,15 @@ def test_skeletons_read_from_their_bytes_as_genpy_reads_them():
         np.testing.assert_array_equal(points, [(p.x, p.y, p.z) for p in msg.joints] or np.zeros((0, 3)))
     with pytest.raises(ValueError, match="do not fit"):
         reader.read(buffer.getvalue()[:-1] + b"\x05\x00\x00\x00")
+
+
+def test_frames_hold_the_commands_rate_and_before_any_the_measured_velocity():
+    frames = EpisodeFrames()
+    frames.on_joints(JOINTS, [1, 2, 3], [0.5, 0, 0])
+    frames.on_tool([0, 0, 1], [0, 0, 0, 1])
+    np.testing.assert_array_equal(frames.sample()["command_velocity"], [0.5, 0, 0])  # holding still as measured
+    frames.on_command(JOINTS, [4, 5, 6], [0.1, -0.2, 0.3])
+    np.testing.assert_allclose(frames.sample()["command_velocity"], [0.1, -0.2, 0.3])
+    frames.on_command(JOINTS, [4, 5, 6])  # a command without its rate
+    np.testing.assert_array_equal(frames.sample()["command_velocity"], [0, 0, 0])
+    assert frames.features()["command_velocity"]["names"] == JOINTS

@@ -44,7 +44,7 @@ def _feed(frames: EpisodeFrames, rng, step: int) -> None:
     frames.on_tool(rng.normal(size=3), [0.0, 0.0, 0.0, 1.0])
     frames.on_gripper(step % 2 == 0)
     frames.on_hand(True, rng.normal(size=3), [0.0, 0.0, 0.0, 1.0], rng.uniform(), rng.uniform())
-    frames.on_command(JOINTS, rng.normal(size=6))
+    frames.on_command(JOINTS, rng.normal(size=6), rng.normal(size=6))
     frames.on_target(rng.normal(size=3), [0.0, 0.0, 0.0, 1.0])
     frames.on_image(_image(step))
 
@@ -138,7 +138,7 @@ def test_round_trip_through_lerobots_loader_and_a_kill_9_mid_episode(tmp_path):
             want = np.stack([f[key] for f in expected])
             assert got[key].dtype == np.float32 and got[key].shape == want.shape
             np.testing.assert_array_equal(got[key], want)  # exact to float32
-        for key in ("observation.hand", "tool_target"):
+        for key in ("observation.hand", "tool_target", "command_velocity"):
             np.testing.assert_array_equal(got[key], np.stack([f[key] for f in expected]))
         video = got[camera_key("scene")]
         want = np.stack([f[camera_key("scene")] for f in expected]).transpose(0, 3, 1, 2) / 255.0
