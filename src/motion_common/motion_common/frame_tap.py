@@ -19,7 +19,11 @@ announces the period (``FrameTap.period``).
 import math
 import threading
 
-__all__ = ["FrameTap"]
+__all__ = ["FrameTap", "MAX_INSTANTS"]
+
+# The most instants one sample sends after a gap (a recorder makes up at most 10 missed
+# frames: motion_apps' frame pacer).
+MAX_INSTANTS = 12
 
 
 class FrameTap:
@@ -38,7 +42,8 @@ class FrameTap:
         self._lock = threading.Lock()  # a stream may be fed from two threads
 
     def add(self, stamp: float, message) -> int:
-        """Offer the stream's next message; how many messages were forwarded (0-2)."""
+        """Offer the stream's next message; how many messages were forwarded (0-2; with
+        ``at_instant``, one for each multiple since the last message)."""
         with self._lock:
             return self._add(stamp, message)
 
@@ -50,10 +55,15 @@ class FrameTap:
         bucket = math.floor(stamp / period)
         last, sent = self._last, 0
         if last is not None and bucket > last[0]:  # a multiple of the period lies in (last, stamp]
-            if self.at_instant is not None:  # the newest multiple, when the message came after a gap
-                self._publish(self.at_instant(last[3], last[1], stamp, message, bucket * period))
+            if self.at_instant is not None:
+                # Every multiple in (last, stamp]: after a gap (a producer held up, a stalled
+                # simulation) each instant gets its value between the two samples, as a blend
+                # of the whole stream would; the last MAX_INSTANTS of a long gap only.
+                first = max(last[0] + 1, bucket - MAX_INSTANTS + 1)
+                for k in range(first, bucket + 1):
+                    self._publish(self.at_instant(last[3], last[1], stamp, message, k * period))
                 self._last = [bucket, message, True, stamp]
-                return 1
+                return bucket + 1 - first
             if self.pairs and not last[2]:
                 self._publish(last[1])
                 sent += 1

@@ -3,6 +3,7 @@ and the recorder's blend at each multiple gets the same two messages it would fr
 whole stream."""
 
 import numpy as np
+import pytest
 
 from motion_apps.stamped_history import StampedHistory
 from motion_common.frame_tap import FrameTap
@@ -92,3 +93,17 @@ def test_one_message_a_frame_holds_the_whole_streams_value_at_each_instant():
         np.testing.assert_allclose(joints, blend(j0, j1, u), rtol=0, atol=1e-12)
         np.testing.assert_allclose(pose, blend(p0, p1, u, quaternion=slice(3, 7)), rtol=0, atol=1e-12)
         np.testing.assert_allclose(velocity, rate_between(j0, j1, t0, t1), rtol=0, atol=1e-9)
+
+
+def test_after_a_gap_each_instant_gets_its_value_between_the_two_samples():
+    # A producer held up (or a stalled simulation) for more than a period: every instant in
+    # the gap is sent, each blended between the samples around it, not only the last one
+    # (the recorder would otherwise repeat the previous frame's value there).
+    sent = []
+    tap = FrameTap(
+        sent.append, lambda: True, 0.1, at_instant=lambda t0, a, t1, b, k: (k, a + (b - a) * (k - t0) / (t1 - t0))
+    )
+    for stamp in (0.095, 0.105, 0.345):
+        tap.add(stamp, stamp * 10.0)
+    assert [k for k, _ in sent] == pytest.approx([0.1, 0.2, 0.3])
+    assert [v for _, v in sent] == pytest.approx([1.0, 2.0, 3.0])
