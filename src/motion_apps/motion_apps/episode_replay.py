@@ -18,6 +18,14 @@ the moment frame ``i``'s targets are sent against the tool recorded at frame ``i
 poses; None while not known yet) the tool is taken at exactly that moment; without it, the
 server is asked (GET_ROBOT_CARTESIAN_POSITION) just before, which is up to a physics step
 and a call off.
+
+Between frames the curve is a cubic Hermite through the frames' targets. Its tangents at the
+frames are, when given, the commands' recorded rate (``command_velocity``): the core
+commanded at the hand's ~110 Hz, and what it did between two frames sets the slope at which
+the arm reaches a frame, which the frames alone cannot tell; without them, Catmull-Rom's.
+An arm that trails its stream by more than the one the episode was recorded on (a UR's
+servoJ smooths over its lookahead) is given the stream ``lead_s`` early: the tool is still
+measured at each frame's moment.
 """
 
 import time
@@ -68,7 +76,8 @@ class ReplayReport:
 
 
 class EpisodeReplay:
-    """One replay; ``client`` has move_j, set_joints, set_gripper and get_pose."""
+    """One replay; ``client`` has move_j, set_joints, set_gripper and get_pose; ``lead_s``:
+    how early the stream of targets runs (rounded to its steps)."""
 
     def __init__(
         self,
@@ -78,6 +87,7 @@ class EpisodeReplay:
         clock=time.monotonic,
         sleep=time.sleep,
         settle_s: float = 0.5,
+        lead_s: float = 0.0,
     ):
         self.client = client
         self.period = 1.0 / fps
@@ -85,6 +95,7 @@ class EpisodeReplay:
         self.clock = clock
         self.sleep = sleep
         self.settle_s = settle_s
+        self.lead_s = float(lead_s)
 
     @staticmethod
     def catmull_rom_tangents(targets: np.ndarray) -> np.ndarray:
@@ -137,31 +148,37 @@ class EpisodeReplay:
             if tangents.shape != joints.shape:
                 raise ValueError(f"velocities of shape {np.shape(velocities)} for {joints.shape} joint targets")
         pending = []  # (frame, moment its targets were sent) not measured yet (tool_at)
+        steps = (len(actions) - 1) * self.substeps  # the stream's last step: the last frame's targets
+        step_s = self.period / self.substeps
+        lead = int(round(self.lead_s / step_s))  # the stream runs this many steps ahead of the frames
         start = self.clock()
-        for i, action in enumerate(actions):
-            self._wait_until(start + i * self.period)
-            report.late_ms[i] = 1000.0 * (self.clock() - start - i * self.period)
-            if i > 0 and tool_at is None:
-                position, _ = self.client.get_pose()
-                report.add(i, 1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
-            elif i > 0:
-                pending.append((i, self.clock()))
-                pending = self._measure(pending, tool_at, tool_poses, report)
-            for k in range(self.substeps if i + 1 < len(actions) else 1):
-                if k:
-                    self._wait_until(start + (i + k / self.substeps) * self.period)
-                target = self._curve(joints, tangents, i, k / self.substeps) if k else joints[i]
-                try:
-                    self.client.set_joints([float(v) for v in target])
-                except Exception as exc:  # noqa: BLE001 - the server's refusal ends the replay, reported
-                    report.refused += 1
-                    report.reason = f"frame {i}: {exc}"
-                    return report
-                if k == 0:
-                    closed = bool(action[dof] > 0.5)
-                    if closed != gripper:
-                        self.client.set_gripper(closed)
-                        gripper = closed
+        for step in range(steps + 1):
+            i, k = divmod(step, self.substeps)
+            if k == 0:  # frame i's moment: its tool is measured
+                self._wait_until(start + i * self.period)
+                report.late_ms[i] = 1000.0 * (self.clock() - start - i * self.period)
+                if i > 0 and tool_at is None:
+                    position, _ = self.client.get_pose()
+                    report.add(i, 1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
+                elif i > 0:
+                    pending.append((i, self.clock()))
+                    pending = self._measure(pending, tool_at, tool_poses, report)
+            else:
+                self._wait_until(start + step * step_s)
+            ahead = min(step + lead, steps)
+            frame, part = divmod(ahead, self.substeps)
+            target = self._curve(joints, tangents, frame, part / self.substeps) if part else joints[frame]
+            try:
+                self.client.set_joints([float(v) for v in target])
+            except Exception as exc:  # noqa: BLE001 - the server's refusal ends the replay, reported
+                report.refused += 1
+                report.reason = f"frame {i}: {exc}"
+                return report
+            if part == 0 and ahead == step + lead:  # frame's targets: its gripper too
+                closed = bool(actions[frame, dof] > 0.5)
+                if closed != gripper:
+                    self.client.set_gripper(closed)
+                    gripper = closed
         deadline = self.clock() + 1.0  # the last moments' tool poses are still on their way
         while pending and self.clock() < deadline:
             self.sleep(0.02)

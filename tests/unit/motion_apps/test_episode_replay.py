@@ -232,3 +232,33 @@ def test_replay_follows_what_the_commands_did_between_frames_with_their_recorded
     assert through_frames["compared"] == with_rates["compared"] >= n - 3
     assert through_frames["tool_error_mm_max"] > 1.0  # 10 ms of the wiggle's slope
     assert with_rates["tool_error_mm_max"] < 0.3
+
+
+def test_a_lead_sends_the_targets_early_by_an_arms_extra_lag():
+    # An arm that trails its stream by 30 ms more than the recorded one (a servoJ's
+    # lookahead): given the stream 30 ms early it retraces the recording.
+    n, extra = 12, 0.03
+    x = 0.02 * np.arange(n, dtype=float) ** 1.5 / n
+    path = np.stack([x, np.zeros(n), np.full(n, 0.5)], axis=1)
+    states = actions = np.hstack([path, np.zeros((n, 1))])
+    tools = np.hstack([path, np.tile([0, 0, 0, 1], (n, 1))])
+
+    def replay(lead_s):
+        now, sent = [0.0], []
+        arm = _Arm()
+        arm.set_joints = lambda joints: sent.append((now[0], np.array(joints)))
+
+        def tool_at(moment):
+            if not sent or sent[-1][0] < moment:
+                return None
+            moment -= extra
+            k = max([i for i, (stamp, _) in enumerate(sent) if stamp <= moment], default=0)
+            (t0, p0), (t1, p1) = sent[k], sent[min(k + 1, len(sent) - 1)]
+            return p0 + (p1 - p0) * ((moment - t0) / (t1 - t0) if t1 > t0 else 0.0)
+
+        clock, sleep = (lambda: now[0]), (lambda s: now.__setitem__(0, now[0] + s))
+        run = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=clock, sleep=sleep, settle_s=0.0, lead_s=lead_s)
+        return run.run(states, actions, tools, tool_at=tool_at).summary()
+
+    assert replay(0.0)["tool_error_mm_max"] > 1.0
+    assert replay(extra)["tool_error_mm_max"] < 0.05
