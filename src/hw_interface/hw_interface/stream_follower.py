@@ -9,7 +9,8 @@ controller never exceeds its joint speed limits, so the simulation must not eith
 physics step moves the servo setpoint toward the latest streamed target by at most the
 velocity limits times the step, scaled uniformly so the tool stays on the straight joint
 path. With ``acceleration`` set, the setpoint's velocity also changes by at most the
-acceleration times the step, and it brakes in time to stop at the target: a client bug (a
+acceleration times the step (each on its own for the joints slowing down, the others by one
+factor), and it brakes in time to stop at the target: a client bug (a
 stale target after a restart, a burst) can then never make the arm lurch. Moving toward a
 fixed goal passes it by at most the last steps' rounding (< 0.1 mrad); a goal that moves
 back under a fast setpoint is passed and come back to, within the limits, as a real servo

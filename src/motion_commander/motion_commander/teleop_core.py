@@ -368,8 +368,9 @@ class TeleopCore:
         ask for several times their speed limit where the position needs a fraction of it.
         Scaling the whole step by one factor would then make the tool's position trail the
         hand by the wrist's backlog (tens of ms). Instead the step reaches the target
-        position with the commanded orientation, plus the largest part of the orientation
-        change the limits still allow. When the position alone is too far for one step, the
+        position (or, where the joints could no longer stop there, the part of the way they
+        can: _braked_position_step) with the commanded orientation, plus the largest part of
+        the orientation change the limits still allow. When the position alone is too far for one step, the
         tool moves 1/overshoot of the way along the Cartesian path (position and orientation
         alike) rather than cutting straight through joint space, which can swing the tool
         far off the path when the IK solution moved a lot.
@@ -387,7 +388,7 @@ class TeleopCore:
                 solved = self._partial_step(target_position, target_rotation, reach, fraction, seed)
                 joints = held if solved is None else solved
             # Checked for speed alone (and acceleration by limit()): the braking at the goal
-            # is already in the fraction, and the position step may run past the goal.
+            # is already in the position's reach and in the orientation's fraction.
             return joints, joints, limiter.speed_ratio(self._command, joints, dt, speed)
         if held is not None:
             # The position alone is beyond the speed limit: the position step, scaled down.
