@@ -186,6 +186,26 @@ def test_velocity_agreement_tells_recorded_velocities_from_missing_ones():
     assert missing["gain"] == 0.0
 
 
+def _lagging_replay(states, actions, tools, lag, velocities=None, lead_s=0.0) -> dict:
+    """The replay's summary against an arm whose tool follows the targets' path ``lag`` s
+    late (linear between the targets sent), on a simulated clock."""
+    now, sent = [0.0], []
+    arm = _Arm()
+    arm.set_joints = lambda joints: sent.append((now[0], np.array(joints)))
+
+    def tool_at(moment):
+        if not sent or sent[-1][0] < moment:
+            return None
+        moment -= lag
+        k = max([i for i, (stamp, _) in enumerate(sent) if stamp <= moment], default=0)
+        (t0, p0), (t1, p1) = sent[k], sent[min(k + 1, len(sent) - 1)]
+        return p0 + (p1 - p0) * ((moment - t0) / (t1 - t0) if t1 > t0 else 0.0)
+
+    clock, sleep = (lambda: now[0]), (lambda s: now.__setitem__(0, now[0] + s))
+    run = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=clock, sleep=sleep, settle_s=0.0, lead_s=lead_s)
+    return run.run(states, actions, tools, tool_at=tool_at, velocities=velocities).summary()
+
+
 def test_replay_follows_what_the_commands_did_between_frames_with_their_recorded_rate():
     """The core commands at the hand's ~110 Hz; 10 Hz frames of a command path that wiggles
     between them lie on a straight line, and a curve through the frames alone reaches each
@@ -209,26 +229,8 @@ def test_replay_follows_what_the_commands_did_between_frames_with_their_recorded
     actions = np.hstack([xyz(command(t)), np.zeros((n, 1))])
     rates = np.hstack([command_rate(t)[:, None], np.zeros((n, 2))])
     tools = np.hstack([states[:, :3], np.tile([0, 0, 0, 1], (n, 1))])
-
-    def replay(velocities):
-        now, sent = [0.0], []
-        arm = _Arm()
-        arm.set_joints = lambda joints: sent.append((now[0], np.array(joints)))
-
-        def tool_at(moment):  # the arm: the targets' path, 10 ms late
-            if not sent or sent[-1][0] < moment:
-                return None
-            moment -= lag
-            k = max([i for i, (stamp, _) in enumerate(sent) if stamp <= moment], default=0)
-            (t0, p0), (t1, p1) = sent[k], sent[min(k + 1, len(sent) - 1)]
-            return p0 + (p1 - p0) * ((moment - t0) / (t1 - t0) if t1 > t0 else 0.0)
-
-        clock, sleep = (lambda: now[0]), (lambda s: now.__setitem__(0, now[0] + s))
-        run = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=clock, sleep=sleep, settle_s=0.0)
-        return run.run(states, actions, tools, tool_at=tool_at, velocities=velocities).summary()
-
-    through_frames = replay(None)
-    with_rates = replay(rates)
+    through_frames = _lagging_replay(states, actions, tools, lag)
+    with_rates = _lagging_replay(states, actions, tools, lag, velocities=rates)
     assert through_frames["compared"] == with_rates["compared"] >= n - 3
     assert through_frames["tool_error_mm_max"] > 1.0  # 10 ms of the wiggle's slope
     assert with_rates["tool_error_mm_max"] < 0.3
@@ -242,23 +244,5 @@ def test_a_lead_sends_the_targets_early_by_an_arms_extra_lag():
     path = np.stack([x, np.zeros(n), np.full(n, 0.5)], axis=1)
     states = actions = np.hstack([path, np.zeros((n, 1))])
     tools = np.hstack([path, np.tile([0, 0, 0, 1], (n, 1))])
-
-    def replay(lead_s):
-        now, sent = [0.0], []
-        arm = _Arm()
-        arm.set_joints = lambda joints: sent.append((now[0], np.array(joints)))
-
-        def tool_at(moment):
-            if not sent or sent[-1][0] < moment:
-                return None
-            moment -= extra
-            k = max([i for i, (stamp, _) in enumerate(sent) if stamp <= moment], default=0)
-            (t0, p0), (t1, p1) = sent[k], sent[min(k + 1, len(sent) - 1)]
-            return p0 + (p1 - p0) * ((moment - t0) / (t1 - t0) if t1 > t0 else 0.0)
-
-        clock, sleep = (lambda: now[0]), (lambda s: now.__setitem__(0, now[0] + s))
-        run = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=clock, sleep=sleep, settle_s=0.0, lead_s=lead_s)
-        return run.run(states, actions, tools, tool_at=tool_at).summary()
-
-    assert replay(0.0)["tool_error_mm_max"] > 1.0
-    assert replay(extra)["tool_error_mm_max"] < 0.05
+    assert _lagging_replay(states, actions, tools, extra)["tool_error_mm_max"] > 1.0
+    assert _lagging_replay(states, actions, tools, extra, lead_s=extra)["tool_error_mm_max"] < 0.05
