@@ -19,10 +19,12 @@ poses; None while not known yet) the tool is taken at exactly that moment; witho
 server is asked (GET_ROBOT_CARTESIAN_POSITION) just before, which is up to a physics step
 and a call off.
 
-Between frames the curve is a cubic Hermite through the frames' targets. Its tangents at the
-frames are, when given, the commands' recorded rate (``command_velocity``): the core
-commanded at the hand's ~110 Hz, and what it did between two frames sets the slope at which
-the arm reaches a frame, which the frames alone cannot tell; without them, Catmull-Rom's.
+Between frames the curve is a cubic Hermite through the frames' targets, with Catmull-Rom's
+tangents at the frames or, when given, recorded rates: the core commanded at the hand's ~110
+Hz, and what it did between two frames sets the slope at which the arm reaches a frame,
+which the frames alone cannot tell. The commands' recorded rate (``command_velocity``)
+halves the typical error on the demo's episodes but, the rate between two consecutive
+commands carrying the hand's jitter, makes the worst frames worse (docs/benchmarks.md).
 An arm that trails its stream by more than the one the episode was recorded on (a UR's
 servoJ smooths over its lookahead) is given the stream ``lead_s`` early: the tool is still
 measured at each frame's moment.
