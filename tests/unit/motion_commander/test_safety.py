@@ -367,3 +367,27 @@ def test_ik_seeded_with_the_last_goal_stays_on_the_commanded_branch():
         np.testing.assert_allclose(goal, core.margin.apply(reference.joints)[0], atol=1e-3)
         core.on_joint_state(command.joints)
     assert limited > 20, "the command never lagged: the test shows nothing"
+
+
+@pytest.mark.parametrize("speed_fraction", [0.0, 0.3, 1.0])
+def test_the_tool_closest_step_keeps_every_joint_within_its_limits(rng, speed_fraction):
+    # Where the acceleration limit binds and a Jacobian is given, the step is solved, not
+    # scaled: whatever the Jacobian and the velocities, each joint's change of velocity stays
+    # within the acceleration limit, and its speed within the (scaled) speed limit wherever
+    # it can get there this step; a halt (speed 0) stops every joint that can stop.
+    dt, acceleration, limits = 0.009, 200.0, np.full(6, 3.14)
+    for _ in range(200):
+        limiter = JointStepLimiter(limits, scale=1.0, acceleration_limit=acceleration)
+        start, wanted = rng.uniform(-1.0, 1.0, 6), rng.uniform(-3.0, 3.0, 6)
+        for _ in range(2):  # two steps toward a target moving at up to 3 rad/s
+            previous = start
+            start, _ = limiter.limit(previous, previous + wanted * dt, dt)
+        velocity = (start - previous) / dt
+        target = start + rng.uniform(-0.05, 0.05, 6)
+        jacobian = rng.normal(size=(6, 6))
+        command, _ = limiter.limit(start, target, dt, speed_fraction, jacobian=lambda j=jacobian: j)
+        new_velocity = (command - start) / dt
+        assert np.all(np.isfinite(command))
+        assert np.all(np.abs(new_velocity - velocity) <= acceleration * dt * (1 + 1e-9) + 1e-9)
+        reachable = np.abs(velocity) - acceleration * dt <= limits * speed_fraction
+        assert np.all(np.abs(new_velocity[reachable]) <= limits[reachable] * speed_fraction * (1 + 1e-9) + 1e-9)
