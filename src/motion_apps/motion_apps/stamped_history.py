@@ -5,18 +5,16 @@ A recorded frame stands for one instant, yet the newest message of a 100 Hz stre
 anywhere from 0 to 10 ms old when a frame is made: at the tool's 0.6 m/s in the teach demo,
 up to 6 mm between the recorded state and the recorded action of one frame, which a replay
 cannot reproduce. So the producers send their value at each frame's instant, blended
-between their two samples stamped around it (``motion_common.frame_blend``, whose
-``blend`` and ``rate_between`` are also here), and the recorder keeps those messages by
-stamp and takes the one for its instant; the replay blends the server's stamped tool poses
-at the moment each frame's targets go out. A stream with nothing after the instant (idle,
-or late) gives its newest value before it; one with nothing before gives its oldest.
+between their two samples stamped around it (``motion_common.frame_blend``), and the
+recorder keeps those messages by stamp and takes the one for its instant; the replay blends
+the server's stamped tool poses at the moment each frame's targets go out. A stream with
+nothing after the instant (idle, or late) gives its newest value before it; one with
+nothing before gives its oldest.
 """
 
 from collections import deque
 
-from motion_common.frame_blend import blend, rate_between
-
-__all__ = ["StampedHistory", "blend", "rate_between"]
+__all__ = ["StampedHistory"]
 
 
 class StampedHistory:

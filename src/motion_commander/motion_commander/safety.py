@@ -242,7 +242,7 @@ class JointStepLimiter:
         velocity = np.asarray(previous_velocity, dtype=float)
         change = self.max_acceleration * dt * dt
         lower, upper = velocity * dt - change, velocity * dt + change
-        speed = np.asarray(self._max_velocity) * (max(speed_fraction, 0.0) * dt)
+        speed = self.max_velocity * (max(speed_fraction, 0.0) * dt)
         # A joint already faster than a speed cap that just dropped (a ramp, a singularity)
         # slows down at the acceleration limit: its bounds are then the acceleration's alone.
         capped_lower, capped_upper = np.maximum(lower, -speed), np.minimum(upper, speed)

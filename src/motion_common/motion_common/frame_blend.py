@@ -40,11 +40,11 @@ def rate_between(before: np.ndarray, after: np.ndarray, stamp_before: float, sta
     return (after - before) / dt if dt > 0 else np.zeros_like(after)
 
 
-def sample_at(stamp_before: float, before, stamp_after: float, after, instant: float, rate: bool = True):
+def sample_at(stamp_before: float, before, stamp_after: float, after, instant: float):
     """(joints, joint rate, pose) at ``instant`` from two samples ``(joints, pose)`` (pose
-    x y z qx qy qz qw) stamped around it; the rate between the two samples (an empty
-    array with ``rate=False``: a stream whose rate means nothing, the core's commands).
-    Samples of a different joint count: the later one as it is."""
+    x y z qx qy qz qw) stamped around it; the rate is the one between the two samples (the
+    measured joints' velocity, the commands' own rate). Samples of a different joint count:
+    the later one as it is."""
     joints_before, pose_before = before
     joints_after, pose_after = after
     span = float(stamp_after) - float(stamp_before)
@@ -53,5 +53,4 @@ def sample_at(stamp_before: float, before, stamp_after: float, after, instant: f
         joints_before, pose_before, u, span = joints_after, pose_after, 1.0, 0.0
     joints = blend(joints_before, joints_after, u)
     pose = blend(pose_before, pose_after, u, quaternion=_QUATERNION)
-    velocity = rate_between(joints_before, joints_after, 0.0, span) if rate else np.zeros(0)
-    return joints, velocity, pose
+    return joints, rate_between(joints_before, joints_after, 0.0, span), pose

@@ -15,17 +15,15 @@ __all__ = ["FrameSampler"]
 
 class FrameSampler:
     """``FrameTap``'s ``at_instant`` for samples ``(joints, pose x y z qx qy qz qw)`` of the
-    joints ``names``, as ``message`` (FrameSample's class); ``rate``: the joints' rate
-    between the samples goes out too (the measured joints' velocity, the commands' own
-    rate)."""
+    joints ``names``, as ``message`` (FrameSample's class), with the joints' rate between
+    the samples (the measured joints' velocity, the commands' own rate)."""
 
-    def __init__(self, message, names, rate: bool = True):
+    def __init__(self, message, names):
         self.message = message
         self.names = list(names)
-        self.rate = rate
 
     def __call__(self, stamp_before: float, before, stamp_after: float, after, instant: float):
-        joints, velocity, pose = sample_at(stamp_before, before, stamp_after, after, instant, rate=self.rate)
+        joints, velocity, pose = sample_at(stamp_before, before, stamp_after, after, instant)
         msg = self.message(name=self.names, position=joints.tolist(), velocity=velocity.tolist())
         msg.header.stamp = genpy.Time.from_sec(instant)
         p, o = msg.pose.position, msg.pose.orientation

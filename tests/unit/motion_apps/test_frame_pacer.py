@@ -62,7 +62,8 @@ def test_a_late_caller_gets_the_ticks_it_missed_up_to_catch_up():
 def _frames_of_a_stalled_recorder(catch_up):
     """A recorder's frames of a stream moving at 1 unit/s (100 Hz, tapped around each frame's
     instant, blended there), its ticking thread held up once for 0.25 s (a loaded machine)."""
-    from motion_apps.stamped_history import StampedHistory, blend  # noqa: PLC0415
+    from motion_apps.stamped_history import StampedHistory  # noqa: PLC0415
+    from motion_common.frame_blend import blend  # noqa: PLC0415
     from motion_common.frame_tap import FrameTap  # noqa: PLC0415
 
     fake = FakeTime()

@@ -6,7 +6,8 @@ phase of its own): the cause of the replay's worst frames (5-6 mm at the teach d
 import numpy as np
 import pytest
 
-from motion_apps.stamped_history import StampedHistory, blend, rate_between
+from motion_apps.stamped_history import StampedHistory
+from motion_common.frame_blend import blend, rate_between
 
 FPS = 10.0
 DELAY = 0.02  # the recorder's FRAME_DELAY_S
