@@ -17,6 +17,14 @@ Rejection (outlier exposure): with a ``NegativeSource`` (``skeleton_negatives``:
 motion, transitions between gestures), each epoch adds ``reject_share`` x the training
 set's size of its windows, whose target is the uniform distribution over the classes
 (weight ``reject_weight``): the network learns to be unsure on motion that is no gesture.
+
+Spotted windows (``spot_share`` > 0): windows cut from continuous streams of the training
+subjects by the spotter's own segmentation (``skeleton_spotted_windows``, window starts
+``SPOT_WINDOW_STARTS``), labelled with the gesture they cover; each epoch adds
+``spot_share`` x the training set's size of them (augmented like the sequences, without a
+way in: they hold one), the few that cover too little of a gesture as windows to reject.
+``pair_weight`` weighs the loss of the classes the teach commands are confused with and
+those commands (``CONFUSED_CLASSES``) that much more.
 """
 
 import os
@@ -28,7 +36,23 @@ import numpy as np
 
 from motion_sensor.gestures.skeleton_features import FRAMES, batch_features, skeleton_features, to_model_frame
 
-__all__ = ["TrainConfig", "augment", "train_model", "predict", "export_onnx", "fold_28_to_14"]
+__all__ = [
+    "CONFUSED_CLASSES",
+    "SPOT_WINDOW_STARTS",
+    "TrainConfig",
+    "augment",
+    "train_model",
+    "predict",
+    "export_onnx",
+    "fold_28_to_14",
+]
+
+# The pairs held-out subjects' non-command gestures are read as teach commands by every
+# seed: swipe down as tap, swipe X as swipe left, pinch as grab.
+CONFUSED_CLASSES = ("swipe_down", "tap", "swipe_x", "swipe_left", "pinch", "grab")
+# Where the spotted training windows start (fractions of the segment): the spotter's two
+# and the starts between and after them, for partial windows.
+SPOT_WINDOW_STARTS = [0.0, 0.1, 0.2, 0.3]
 
 
 @dataclass
@@ -49,6 +73,8 @@ class TrainConfig:
     lead_in: float = 0.0
     reject_share: float = 0.0
     reject_weight: float = 1.0
+    spot_share: float = 0.0
+    pair_weight: float = 1.0
     seed: int = 0
     threads: int = 1
 
@@ -66,14 +92,15 @@ def _rotation(rng, max_deg):
     return rz @ ry @ rx
 
 
-def augment(sequence, rng, config):
-    """One augmented copy of ``sequence`` (L, 22, 3) and the fractional frames to sample."""
+def augment(sequence, rng, config, way_in=True):
+    """One augmented copy of ``sequence`` (L, 22, 3) and the fractional frames to sample
+    (``way_in``: the sequence may get one, with probability ``config.lead_in``)."""
     seq = np.asarray(sequence, dtype=np.float64)
     centre = seq[:, 1].mean(axis=0)
     seq = (seq - centre) @ _rotation(rng, config.rotate_deg).T
     seq = seq * (1.0 + rng.uniform(-config.scale, config.scale)) + centre
     seq = seq + rng.normal(0.0, config.noise_m, seq.shape)
-    if config.lead_in and rng.uniform() < config.lead_in:
+    if way_in and config.lead_in and rng.uniform() < config.lead_in:
         seq = np.concatenate([_way_in(seq, rng), seq])
     last = len(seq) - 1
     start = rng.uniform(0.0, config.crop) * last
@@ -115,31 +142,39 @@ def train_model(dataset, config=None, log=None, negatives=None):
     model = SkeletonNet(filters=config.filters)
     optimizer = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay)
     n_neg = int(round(config.reject_share * len(dataset))) if negatives else 0
-    steps_per_epoch = max(1, int(np.ceil((len(dataset) + n_neg) / config.batch)))
+    pool = _spotted_pool(dataset, config)
+    n_spot = int(round(config.spot_share * len(dataset))) if pool is not None else 0
+    steps_per_epoch = max(1, int(np.ceil((len(dataset) + n_spot + n_neg) / config.batch)))
     scheduler = torch.optim.lr_scheduler.OneCycleLR(
         optimizer, max_lr=config.lr, total_steps=config.epochs * steps_per_epoch, pct_start=0.1
     )
-    loss_fn = torch.nn.CrossEntropyLoss(label_smoothing=config.label_smoothing)
-    y14 = torch.as_tensor(dataset.label14)
-    y28 = torch.as_tensor(dataset.label28)
+    loss14, loss28 = _losses(torch, config)
     started = time.monotonic()
     inputs = [to_model_frame(s) for s in dataset.sequences]
     for epoch in range(config.epochs):
         model.train()
+        spot = rng.integers(len(pool[0]), size=n_spot) if n_spot else np.zeros(0, dtype=int)
         drawn = [to_model_frame(s) for s in negatives.draw(rng, n_neg)] if n_neg else []
-        sequences, positions = zip(*(augment(s, rng, config) for s in inputs + drawn), strict=True)
+        augmented = [augment(s, rng, config) for s in inputs]
+        augmented += [augment(pool[0][k], rng, config, way_in=False) for k in spot]
+        augmented += [augment(s, rng, config) for s in drawn]
+        sequences, positions = zip(*augmented, strict=True)
         jcd, slow, fast = (torch.as_tensor(a) for a in batch_features(sequences, positions))
-        order = torch.as_tensor(rng.permutation(len(dataset) + n_neg))
+        none = np.full(n_neg, -1)  # a window to reject
+        y14 = torch.as_tensor(np.concatenate([dataset.label14, pool[1][spot] if n_spot else [], none]).astype(np.int64))
+        y28 = torch.as_tensor(np.concatenate([dataset.label28, pool[2][spot] if n_spot else [], none]).astype(np.int64))
+        order = torch.as_tensor(rng.permutation(len(augmented)))
         total = 0.0
         for first in range(0, len(order), config.batch):
             idx = order[first : first + config.batch]
             if len(idx) < 2:  # batch norm needs two samples
                 continue
             out14, out28 = model(jcd[idx], slow[idx], fast[idx])
-            pos, neg = idx < len(dataset), idx >= len(dataset)
+            pos = y14[idx] >= 0
+            neg = ~pos
             loss = 0.0
             if pos.any():
-                loss = loss_fn(out14[pos], y14[idx[pos]]) + loss_fn(out28[pos], y28[idx[pos]])
+                loss = loss14(out14[pos], y14[idx[pos]]) + loss28(out28[pos], y28[idx[pos]])
             if neg.any():  # cross-entropy against the uniform distribution
                 uniform = -out14[neg].log_softmax(1).mean(1) - out28[neg].log_softmax(1).mean(1)
                 loss = loss + config.reject_weight * uniform.sum() / len(idx)
@@ -155,6 +190,34 @@ def train_model(dataset, config=None, log=None, negatives=None):
             )
     model.eval()
     return model
+
+
+def _spotted_pool(dataset, config):
+    """(windows in the model frame, label14, label28) of the spotted windows, or None."""
+    if config.spot_share <= 0.0:
+        return None
+    from motion_sensor.gestures.skeleton_spotted_windows import spotted_windows
+
+    found = spotted_windows(
+        dataset, np.random.default_rng(config.seed + 1), params={"window_starts": SPOT_WINDOW_STARTS}
+    )
+    if not len(found):
+        return None
+    return [to_model_frame(w) for w in found.windows], found.label14, found.label28
+
+
+def _losses(torch, config):
+    """The 14- and 28-class losses; with ``pair_weight`` the ``CONFUSED_CLASSES`` weigh more."""
+    from motion_sensor.gestures.skeleton_dataset import CLASSES_14
+
+    if config.pair_weight == 1.0:
+        plain = torch.nn.CrossEntropyLoss(label_smoothing=config.label_smoothing)
+        return plain, plain
+    w14 = np.array([config.pair_weight if c in CONFUSED_CLASSES else 1.0 for c in CLASSES_14], dtype=np.float32)
+    w28 = np.repeat(w14, 2)  # gesture x (one finger, whole hand)
+    return tuple(
+        torch.nn.CrossEntropyLoss(weight=torch.as_tensor(w), label_smoothing=config.label_smoothing) for w in (w14, w28)
+    )
 
 
 def fold_28_to_14(prob28):
