@@ -15,6 +15,13 @@ Two named sets of recordings:
 Their time lag is also measured on slow moves (a still-hand recording plus a ramp), where a
 speed-adaptive filter smooths most.
 
+Two references say what the evaluation set allows (``limits``):
+- a centred (non-causal, so unattainable live) Gaussian smoother at mean-10's jitter: the
+  lag left is the noise it removes, a floor for any filter at that jitter;
+- the default one_euro's lag split by the hand's net speed over 0.2 s, next to the speeds a
+  still recording's palm moves at: a speed gate can only cut the lag of moves faster than
+  the still hands it must hold steady.
+
 Run: bench/run filter_bench
 Writes bench/results/filter_bench.json and bench/results/filter_tradeoff.png.
 """
@@ -234,6 +241,7 @@ def main():
     results["verdict"] = verdict
     results["shipped_defaults"] = check_defaults(data)
     results["shipped_defaults"]["evaluation_missing"] = missing
+    results["limits"] = limits(data, mean10)
     write_results("filter_bench", results, show=False)
     plot(results, os.path.join(RESULTS, "filter_tradeoff.png"))
     summary = {name: {k: v for k, v in verdict.items() if k != "pareto"} for name, verdict in verdict.items()}
@@ -245,6 +253,7 @@ def main():
                 "mean10": results["mean10"],
                 "verdict": summary,
                 "shipped_defaults": results["shipped_defaults"],
+                "limits": results["limits"],
             },
             indent=2,
         )
@@ -286,6 +295,56 @@ def check_defaults(data):
         out[label]["meets_one_third_on_evaluation"] = bool(
             out[label]["evaluation_steadier_than_mean10"] and out[label]["evaluation_lag_ratio_to_mean10"] <= 1 / 3
         )
+    return out
+
+
+def net_speeds(stamps, positions, window=0.2):
+    """Net displacement over a centred ``window`` divided by its time (m/s), per frame."""
+    start = np.searchsorted(stamps, stamps - window / 2)
+    end = np.searchsorted(stamps, stamps + window / 2, side="right") - 1
+    span = np.maximum(stamps[end] - stamps[start], 1e-9)
+    return np.linalg.norm(positions[end] - positions[start], axis=1) / span
+
+
+def centred_floor(data, still, moving, jitter_goal):
+    """Lag of a centred Gaussian smoother whose jitter equals ``jitter_goal`` (interpolated
+    over its width): what a filter that could see the future would keep."""
+    from scipy.ndimage import gaussian_filter1d
+
+    points = []
+    for sigma in np.arange(1.0, 6.01, 0.25):  # frames
+        smooth = functools.partial(gaussian_filter1d, sigma=sigma, axis=0, mode="nearest")
+        points.append(evaluate(data, lambda n, smooth=smooth: smooth(data[n][1]), still, moving))
+    jitters, lags = zip(*sorted(points))
+    return float(np.interp(jitter_goal, jitters, lags))
+
+
+def limits(data, mean10, speed_bins=(0.0, 0.02, 0.05, 0.08, 0.12, 0.2, 0.5, np.inf), skip=10):
+    """What the evaluation set allows: the centred floor's ratio to mean-10's lag on each
+    split, and where the default one_euro's evaluation lag lies by the hand's net speed."""
+    splits = {"tuning": (TUNING_STILL, TUNING_MOVING)}
+    splits["evaluation"] = (
+        [n for n in EVALUATION_STILL if n in data],
+        [n for n in EVALUATION_MOVING if n in data],
+    )
+    out = {"speed_bins_m_s": [float(b) for b in speed_bins[:-1]]}
+    for split, (still, moving) in splits.items():
+        mean_jitter, mean_lag = evaluate(data, functools.partial(run_default, data, "mean"), still, moving)
+        floor = centred_floor(data, still, moving, mean_jitter)
+        out[f"{split}_centred_floor_lag_mm"] = round(floor, 3)
+        out[f"{split}_centred_floor_ratio_to_mean10"] = round(floor / mean_lag, 3)
+    still, moving = splits["evaluation"]
+    share = np.zeros(len(speed_bins) - 1)
+    for name in moving:
+        stamps, raw = data[name][0], data[name][1]
+        distance = np.linalg.norm(run_default(data, "one_euro", name) - raw, axis=1)[skip:]
+        bins = np.digitize(net_speeds(stamps, raw)[skip:], speed_bins) - 1
+        share += np.bincount(bins, weights=distance, minlength=len(share))[: len(share)] / len(distance) * 1000
+    share /= len(moving)
+    out["evaluation_one_euro_lag_mm_by_speed"] = [round(float(v), 3) for v in share]
+    frames = np.concatenate([net_speeds(data[n][0], data[n][1])[skip:] for n in still])
+    counts = np.bincount(np.digitize(frames, speed_bins) - 1, minlength=len(share))[: len(share)]
+    out["evaluation_still_frames_by_speed"] = [round(float(v), 3) for v in counts / len(frames)]
     return out
 
 
