@@ -17,6 +17,13 @@ replaced: palmPosition = the designed path + the source frame's own tremor (its 
 minus its 0.3 s moving average), and every finger position moves with the palm. The hand
 id is made constant (one hand throughout) and frames are re-stamped at 110 fps.
 
+Where two frames that follow each other in the stream are not neighbours in their
+recording (a pool cycling round, a pool made of two stretches, a segment or a shape
+starting), their tremors differ by up to 14 mm: a palm that teleports in 9 ms, which no
+hand does and which the core turned into a jumping command. There the tremor continues
+from the frame before and the difference fades out over ``SEAM_S`` (a minimum-jerk
+ease), so the palm's path stays one a hand can make.
+
 Run: .venv/bin/python tests/tools/make_teach_stream.py [--output PATH] (deterministic).
 """
 
@@ -82,6 +89,10 @@ SCRIPT = [
     ("open", 0.3, None),  # and the hand leaves
 ]
 CIRCLE_RADIUS = 0.06  # m
+# s over which a seam's tremor difference fades: the largest, 14 mm, moves the palm at
+# 0.09 m/s at most (minimum jerk), a change of its per-frame move of 0.2 mm at most
+SEAM_S = 0.3
+SEAM_FRAMES = int(round(SEAM_S * FPS))
 
 
 def read_frames(name):
@@ -140,14 +151,38 @@ class Sources:
                 raise SystemExit(f"no source frames for shape {name!r}")
 
     def frame(self, shape, k):
-        """The k-th frame of a shape's pool (cycling) and its tremor (mm)."""
+        """The k-th frame of a shape's pool (cycling), its tremor (mm) and where it comes
+        from, (recording, index)."""
         recording, index = self.pools[shape][k % len(self.pools[shape])]
-        return self.recordings[recording][index], self.tremors[recording][index]
+        return self.recordings[recording][index], self.tremors[recording][index], (recording, index)
+
+
+class SeamlessTremor:
+    """The tremors of a sequence of source frames, continuous where consecutive frames are
+    not neighbours in their recording: there the tremor goes on from the frame before and
+    the difference fades out over ``SEAM_S`` (see the module's docstring)."""
+
+    def __init__(self, fade_frames=SEAM_FRAMES):
+        self.fade_frames = fade_frames
+        self.previous = None  # (recording, index) of the previous frame
+        self.last = np.zeros(3)  # the previous frame's tremor as sent
+        self.carry = np.zeros(3)  # what the seam's difference adds, before its fade
+        self.since = fade_frames  # frames since the last seam
+
+    def __call__(self, jitter, origin):
+        recording, index = origin
+        if self.previous is not None and self.previous != (recording, index - 1):
+            self.carry, self.since = self.last - jitter, 0
+        fade = 1.0 - min_jerk(self.since / self.fade_frames)
+        self.last = jitter + self.carry * fade
+        self.previous, self.since = origin, self.since + 1
+        return self.last
 
 
 def build():
     """The stream's JSON lines (handshake first)."""
     sources = Sources()
+    seamless = SeamlessTremor()
     lines = [json.dumps({"version": 6})]
     position = np.zeros(3)
     stamp_us, frame_id = 1_000_000.0, 1
@@ -164,7 +199,8 @@ def build():
                 # (as the shipped circle templates): "right" is -y, "up" is +z.
                 angle = np.pi / 2 - 2 * np.pi * min_jerk(fraction)
                 offset = offset + CIRCLE_RADIUS * np.array([0.0, -np.cos(angle), np.sin(angle) - 1.0])
-            source, jitter = sources.frame(shape, k)
+            source, jitter, origin = sources.frame(shape, k)
+            jitter = seamless(jitter, origin)
             lines.append(
                 json.dumps(relocate(source, HAND_ORIGIN_LEAP + REP103_TO_LEAP @ offset + jitter, stamp_us, frame_id))
             )

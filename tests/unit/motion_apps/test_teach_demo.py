@@ -45,6 +45,29 @@ def test_stream_is_real_frames_with_one_hand_and_a_designed_path():
     assert grabs.max() == pytest.approx(1.0) and grabs.min() == 0.0
 
 
+def test_stream_palm_moves_as_a_hand_can_without_a_step():
+    # The change of the palm's move from one 9 ms frame to the next: the source recordings'
+    # own hands reach 2.9 mm (grab) and 1.5 (Waiting-110fps); where the generator put two
+    # frames side by side that are not neighbours in their recording, their tremors used to
+    # differ by up to 14 mm (15.8 mm here), a step the core commanded as one (13 mrad on
+    # joint 0 within one command interval).
+    with gzip.open(STREAM, "rt") as stream:
+        palms = np.array([json.loads(line)["hands"][0]["palmPosition"] for line in list(stream)[1:]])
+    change = np.linalg.norm(palms[2:] - 2 * palms[1:-1] + palms[:-2], axis=1)
+    assert change.max() <= 3.5, f"palm step of {change.max():.1f} mm at frame {int(change.argmax()) + 1}"
+
+
+def test_tremor_goes_on_across_a_seam_and_fades_its_difference():
+    seamless = make_teach_stream.SeamlessTremor(fade_frames=10)
+    sent = [seamless(np.full(3, 0.1 * k), ("grab", k)) for k in range(5)]  # neighbours: as they are
+    sent += [seamless(np.full(3, 14.0 + 0.1 * k), ("grab", 100 + k)) for k in range(15)]  # a seam at 100
+    sent = np.array(sent)[:, 0]
+    np.testing.assert_allclose(sent[:5], 0.1 * np.arange(5))
+    assert abs(sent[5] - sent[4]) < 1e-9  # goes on from the frame before
+    assert np.abs(np.diff(sent)).max() < 14.0 / 10 * 1.9  # the 14 mm spread over the fade (min jerk's peak 1.875)
+    np.testing.assert_allclose(sent[15:], 14.0 + 0.1 * np.arange(10, 15))  # faded out: the source's own
+
+
 @pytest.fixture(scope="module")
 def taught(tmp_path_factory):
     """Runs the shipped stream through the recognizer (teach_gestures.yaml) and a teach
