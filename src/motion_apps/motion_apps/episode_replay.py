@@ -1,4 +1,5 @@
-"""Replays a recorded episode's actions on a robot behind the commander service and measures
+"""Replays a recorded episode (its actions, or the recorded joint path itself: ``through_states``
+below) on a robot behind the commander service and measures
 how closely the tool retraces the recorded path (plain Python; the client and the clock are
 injected, so it is tested without ROS).
 
@@ -28,6 +29,16 @@ commands carrying the hand's jitter, makes the worst frames worse (docs/benchmar
 An arm that trails its stream by more than the one the episode was recorded on (a UR's
 servoJ smooths over its lookahead) is given the stream ``lead_s`` early: the tool is still
 measured at each frame's moment.
+
+``through_states``: the recorded joint path itself instead of the actions. The arm that
+was recorded trailed its commands by a lag (~11 ms in the simulation), so its state at a
+frame is where the commands were that much earlier, and the motion of the commands between
+two frames (the hand's ~110 Hz, which 10 Hz actions do not hold) is in the states at the
+frames already. The replay streams the cubic through the recorded joints, with the
+measured joint velocities as its tangents, ahead by that lag (estimated from the episode:
+the actions against the states, ``recorded_lag``) plus ``lead_s``: an arm that trails its
+stream as the recorded one did is then at each frame's recorded joints at the frame's
+moment, whatever the commands did in between.
 """
 
 import time
@@ -48,6 +59,7 @@ class ReplayReport:
     worst_frame: int = -1
     late_ms: dict = field(default_factory=dict)  # frame -> how late its targets went out (ms)
     errors_by_frame: dict = field(default_factory=dict)  # frame -> tool error (mm)
+    lead_ms: float = 0.0  # how far ahead of the frames the stream ran (ms)
 
     def add(self, frame: int, error_mm: float) -> None:
         if not self.tool_error_mm or error_mm > max(self.tool_error_mm):
@@ -74,6 +86,7 @@ class ReplayReport:
             "worst_frame": self.worst_frame,
             "worst_frames": self.worst(),
             "late_ms_max": round(max(self.late_ms.values()), 1) if self.late_ms else 0.0,
+            "stream_lead_ms": round(self.lead_ms, 2),
         }
 
 
@@ -113,6 +126,17 @@ class EpisodeReplay:
         return tangents
 
     @staticmethod
+    def recorded_lag(states: np.ndarray, actions: np.ndarray, velocities: np.ndarray, most_s: float = 0.1) -> float:
+        """How long (s) the recorded arm trailed its commands: the least-squares ``lag`` in
+        action - state = measured velocity * lag over every joint and frame (0 for an
+        episode that never moves; at most ``most_s``)."""
+        dof = states.shape[1] - 1
+        behind = (np.asarray(actions, dtype=np.float64) - np.asarray(states, dtype=np.float64))[:, :dof].ravel()
+        speed = np.asarray(velocities, dtype=np.float64)[:, :dof].ravel()
+        power = float(np.dot(speed, speed))
+        return min(max(float(np.dot(behind, speed)) / power, 0.0), most_s) if power > 0 else 0.0
+
+    @staticmethod
     def _curve(targets: np.ndarray, tangents: np.ndarray, i: int, u: float) -> np.ndarray:
         """The cubic Hermite curve between frame ``i``'s and ``i + 1``'s targets at ``u`` in
         [0, 1], with the frames' ``tangents`` (a change per frame)."""
@@ -126,33 +150,46 @@ class EpisodeReplay:
         )
 
     def run(
-        self, states: np.ndarray, actions: np.ndarray, tool_poses: np.ndarray, tool_at=None, velocities=None
+        self,
+        states: np.ndarray,
+        actions: np.ndarray,
+        tool_poses: np.ndarray,
+        tool_at=None,
+        velocities=None,
+        through_states: bool = False,
     ) -> ReplayReport:
         """``states`` and ``actions``: joints then gripper per frame; ``tool_poses``: x y z
         qx qy qz qw per frame, as recorded; ``tool_at``: see the module's docstring;
-        ``velocities``: the measured joint velocities per frame (rad/s), the curve's
-        tangents at the frames (None: Catmull-Rom's)."""
+        ``velocities``: joint velocities per frame (rad/s), the curve's tangents at the
+        frames (None: Catmull-Rom's); ``through_states``: the curve goes through the
+        recorded joints, ahead by the recorded lag (see the module's docstring), and
+        ``velocities`` are the measured ones."""
         if not (len(states) == len(actions) == len(tool_poses)) or len(states) == 0:
             raise ValueError(
                 f"episode arrays differ in length or are empty: {len(states)}, {len(actions)}, {len(tool_poses)}"
             )
+        if through_states and velocities is None:
+            raise ValueError("a replay through the recorded joints needs their measured velocities")
         report = ReplayReport(frames=len(actions))
         dof = states.shape[1] - 1
         self.client.move_j([float(v) for v in states[0, :dof]])
         gripper = bool(states[0, dof] > 0.5)
         self.client.set_gripper(gripper)
         self.sleep(self.settle_s)
-        joints = np.asarray(actions[:, :dof], dtype=np.float64)
+        joints = np.asarray((states if through_states else actions)[:, :dof], dtype=np.float64)
         if velocities is None:
             tangents = self.catmull_rom_tangents(joints)
         else:
             tangents = np.asarray(velocities, dtype=np.float64)[:, :dof] * self.period
             if tangents.shape != joints.shape:
                 raise ValueError(f"velocities of shape {np.shape(velocities)} for {joints.shape} joint targets")
+        lead_s = self.lead_s + (self.recorded_lag(states, actions, velocities) if through_states else 0.0)
+        report.lead_ms = 1000.0 * lead_s
         pending = []  # (frame, moment its targets were sent) not measured yet (tool_at)
         steps = (len(actions) - 1) * self.substeps  # the stream's last step: the last frame's targets
         step_s = self.period / self.substeps
-        lead = int(round(self.lead_s / step_s))  # the stream runs this many steps ahead of the frames
+        lead = round(lead_s / step_s, 9)  # the stream runs this many steps (or parts of one) ahead of the frames
+        reached = 0  # the next frame whose gripper is still to be set
         start = self.clock()
         for step in range(steps + 1):
             i, k = divmod(step, self.substeps)
@@ -168,16 +205,20 @@ class EpisodeReplay:
             else:
                 self._wait_until(start + step * step_s)
             ahead = min(step + lead, steps)
-            frame, part = divmod(ahead, self.substeps)
-            target = self._curve(joints, tangents, frame, part / self.substeps) if part else joints[frame]
+            frame = int(ahead // self.substeps)
+            part = (ahead - frame * self.substeps) / self.substeps
+            target = self._curve(joints, tangents, frame, part) if part else joints[frame]
+            if step + lead > steps:  # past the last frame: on along its tangent for the lead's last steps
+                target = joints[-1] + tangents[-1] * ((step + lead - steps) / self.substeps)
             try:
                 self.client.set_joints([float(v) for v in target])
             except Exception as exc:  # noqa: BLE001 - the server's refusal ends the replay, reported
                 report.refused += 1
                 report.reason = f"frame {i}: {exc}"
                 return report
-            if part == 0 and ahead == step + lead:  # frame's targets: its gripper too
-                closed = bool(actions[frame, dof] > 0.5)
+            while reached <= frame:  # each frame the stream has reached: its gripper too
+                closed = bool(actions[reached, dof] > 0.5)
+                reached += 1
                 if closed != gripper:
                     self.client.set_gripper(closed)
                     gripper = closed

@@ -186,7 +186,7 @@ def test_velocity_agreement_tells_recorded_velocities_from_missing_ones():
     assert missing["gain"] == 0.0
 
 
-def _lagging_replay(states, actions, tools, lag, velocities=None, lead_s=0.0) -> dict:
+def _lagging_replay(states, actions, tools, lag, velocities=None, lead_s=0.0, through_states=False) -> dict:
     """The replay's summary against an arm whose tool follows the targets' path ``lag`` s
     late (linear between the targets sent), on a simulated clock."""
     now, sent = [0.0], []
@@ -203,7 +203,9 @@ def _lagging_replay(states, actions, tools, lag, velocities=None, lead_s=0.0) ->
 
     clock, sleep = (lambda: now[0]), (lambda s: now.__setitem__(0, now[0] + s))
     run = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=clock, sleep=sleep, settle_s=0.0, lead_s=lead_s)
-    return run.run(states, actions, tools, tool_at=tool_at, velocities=velocities).summary()
+    return run.run(
+        states, actions, tools, tool_at=tool_at, velocities=velocities, through_states=through_states
+    ).summary()
 
 
 def test_replay_follows_what_the_commands_did_between_frames_with_their_recorded_rate():
@@ -246,3 +248,58 @@ def test_a_lead_sends_the_targets_early_by_an_arms_extra_lag():
     tools = np.hstack([path, np.tile([0, 0, 0, 1], (n, 1))])
     assert _lagging_replay(states, actions, tools, extra)["tool_error_mm_max"] > 1.0
     assert _lagging_replay(states, actions, tools, extra, lead_s=extra)["tool_error_mm_max"] < 0.05
+
+
+def _wiggling_episode(lag, n=14, wiggle=0.004):
+    """Commands at 0.1 m/s with a ``wiggle`` of 7 Hz between the 10 Hz frames (the hand's
+    motion that the frames' actions do not hold), the arm ``lag`` s behind them: states,
+    actions, measured velocities, tools."""
+
+    def command(t):
+        return 0.1 * t + wiggle * np.sin(2 * np.pi * 7.0 * t)
+
+    def rate(t):
+        return 0.1 + wiggle * 2 * np.pi * 7.0 * np.cos(2 * np.pi * 7.0 * t)
+
+    t = np.arange(n) / 10.0
+
+    def xyz(x):
+        return np.stack([x, np.zeros_like(x), np.full_like(x, 0.5)], axis=1)
+
+    states = np.hstack([xyz(command(t - lag)), np.zeros((n, 1))])
+    actions = np.hstack([xyz(command(t)), np.zeros((n, 1))])
+    velocities = np.hstack([rate(t - lag)[:, None], np.zeros((n, 2))])
+    tools = np.hstack([states[:, :3], np.tile([0, 0, 0, 1], (n, 1))])
+    return states, actions, velocities, tools
+
+
+def test_the_recorded_lag_is_the_arms_delay_behind_its_commands():
+    states, actions, velocities, _ = _wiggling_episode(0.012)
+    assert EpisodeReplay.recorded_lag(states, actions, velocities) == pytest.approx(0.012, abs=0.0015)
+    assert EpisodeReplay.recorded_lag(states, states, 0 * velocities) == 0.0  # never moves
+
+
+def test_replay_through_the_recorded_joints_holds_the_motion_between_frames():
+    """The worst frames of the demo's replays through the actions: the commands moved
+    between two 10 Hz frames in a way the actions do not hold (a 7 Hz wiggle here), and an
+    arm 12 ms behind its targets is off by 12 ms of that motion at a frame. The recorded
+    joints at the frames hold it (the arm was there), and the replay that streams them
+    ahead by the arm's lag, estimated from the episode, puts the arm there again."""
+    lag = 0.012
+    states, actions, velocities, tools = _wiggling_episode(lag)
+    through_actions = _lagging_replay(states, actions, tools, lag)
+    with_command_rate = _lagging_replay(states, actions, tools, lag, velocities=velocities)
+    through_states = _lagging_replay(states, actions, tools, lag, velocities=velocities, through_states=True)
+    assert through_actions["tool_error_mm_max"] > 1.0
+    assert through_states["compared"] >= len(states) - 3
+    assert through_states["stream_lead_ms"] == pytest.approx(12.0, abs=1.5)
+    assert through_states["tool_error_mm_max"] < 0.2 < with_command_rate["tool_error_mm_max"]
+    # An arm that trails its stream 30 ms more than the recorded one: the lead adds to the lag.
+    slower = _lagging_replay(states, actions, tools, lag + 0.03, velocities, lead_s=0.03, through_states=True)
+    assert slower["tool_error_mm_max"] < 0.2
+
+
+def test_replay_through_the_recorded_joints_needs_their_velocities():
+    states, actions, _, tools = _wiggling_episode(0.01)
+    with pytest.raises(ValueError, match="measured velocities"):
+        _replay(_Arm()).run(states, actions, tools, through_states=True)
