@@ -209,8 +209,9 @@ EPISODE_RECORDER = NodeInterface(
 REPLAY_EPISODE = NodeInterface(
     "motion_apps",
     "replay_episode",
-    "Command-line replay of a recorded episode's actions through the server's safety checks, reporting the "
-    "tracking error against the recorded states (anonymous node; arguments on the command line, see --help).",
+    "Command-line replay of a recorded episode through the server's safety checks (by default its recorded joint "
+    "path, ahead by the recorded arm's lag; or its actions), reporting the tracking error against the recorded "
+    "states (anonymous node; arguments on the command line, see --help).",
     subscribes=(
         Topic(
             "motion_controller/tool_pose",
