@@ -72,6 +72,21 @@ def driver_parameters(name: str):
     return getattr(driver_factory(name), "PARAMETERS", None)
 
 
+def stream_lag_s(name: str, driver_params: dict | None = None) -> float:
+    """How long (s) driver ``name``'s arm trails a streamed target beyond the simulation's
+    follower: its ``STREAM_LAG_PARAM`` from ``driver_params``, else that parameter's
+    declared default; 0 for a driver that declares none."""
+    factory = driver_factory(name)
+    key = getattr(factory, "STREAM_LAG_PARAM", None)
+    if key is None:
+        return 0.0
+    values = driver_params or {}
+    if key in values:
+        return float(values[key])
+    schema = getattr(factory, "PARAMETERS", None)
+    return float(schema.params[key].default) if schema is not None and key in schema.params else 0.0
+
+
 def create_driver(name: str, **params):
     """Create driver ``name`` with its parameters."""
     factory = driver_factory(name)

@@ -36,6 +36,12 @@ class RobotDriver(abc.ABC):
     #: None: the server passes them unchecked.
     PARAMETERS = None
 
+    #: The name of the driver parameter (s) by which the arm trails a streamed (SET_JOINTS)
+    #: target beyond the simulation's follower, which has no smoothing (UR: servoJ's
+    #: lookahead_time); None: no more than it. A replay of an episode recorded in the
+    #: simulation sends its stream that much earlier (``registry.stream_lag_s``).
+    STREAM_LAG_PARAM = None
+
     @property
     @abc.abstractmethod
     def joint_names(self) -> list[str]:

@@ -93,6 +93,9 @@ class URRtdeDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
 
     name = "ur_rtde"
 
+    #: servoJ smooths the stream over its lookahead and the arm trails by about as much.
+    STREAM_LAG_PARAM = "lookahead_time"
+
     PARAMETERS = ParamSchema(
         [
             *ARMING_PARAMS,

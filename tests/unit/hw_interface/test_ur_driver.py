@@ -12,7 +12,7 @@ import pytest
 from hw_interface.dispatcher import CommandDispatcher
 from hw_interface.errors import HwInterfaceError
 from hw_interface.protocol import CommandIndex, Result
-from hw_interface.registry import create_driver, driver_parameters
+from hw_interface.registry import create_driver, driver_parameters, stream_lag_s
 from hw_interface.testing.fake_rtde import FakeUR
 from hw_interface.ur_driver import URRtdeDriver, pose_to_ur, ur_to_pose
 
@@ -289,6 +289,14 @@ def test_ur_rtde_fake_driver_starts_at_the_start_pose_and_checks_its_parameters(
     schema = driver_parameters("ur_rtde_fake")
     assert "initial_joints" in schema.params and "initial_joints" not in driver_parameters("ur_rtde").params
     assert schema.params["joint_stop_deceleration"].unit == "rad/s^2"
+
+
+def test_the_ur_drivers_declare_how_long_their_arm_trails_a_stream():
+    # servoJ's lookahead: a replay of an episode recorded in the simulation sends its
+    # stream that much earlier; the simulation's own driver declares none.
+    assert stream_lag_s("ur_rtde") == URRtdeDriver.PARAMETERS.params["lookahead_time"].default == 0.03
+    assert stream_lag_s("ur_rtde_fake", {"lookahead_time": 0.05, "gain": 600.0}) == 0.05
+    assert stream_lag_s("pybullet", {"gui": False}) == 0.0
 
 
 def test_a_stop_then_a_new_target_never_leaves_two_servoj_loops(fake):

@@ -449,3 +449,4 @@ def fake_ur_driver(
 
 
 fake_ur_driver.PARAMETERS = fake_driver_parameters(URRtdeDriver.PARAMETERS)
+fake_ur_driver.STREAM_LAG_PARAM = URRtdeDriver.STREAM_LAG_PARAM
