@@ -90,6 +90,28 @@ TRACKER_PARAMS = ParamSchema(
             low=0,
             doc="the palm centre reported lies this far behind the seen palm surface (0: the surface)",
         ),
+        Param(
+            "palm_core_width_m",
+            0.014,
+            unit="m",
+            low=0,
+            doc="the palm's core: blob points at least this far inside its outline, more than a finger's "
+            "half width (0: the palm centre is the distance transform's maximum)",
+        ),
+        Param(
+            "palm_core_radius_m",
+            0.13,
+            unit="m",
+            low=0.02,
+            doc="the palm's core lies within this distance of the distance transform's maximum",
+        ),
+        Param(
+            "palm_core_wrist_margin_m",
+            0.035,
+            unit="m",
+            low=0,
+            doc="the palm's core starts this far beyond the wrist the width profile found",
+        ),
         Param("hand_radius_m", 0.1, unit="m", low=0.03, doc="points this close to the palm centre are the hand"),
         Param("palm_faces_camera", True, doc="the palm faces the camera (z, out of the back of the hand, points away)"),
         Param(
@@ -132,6 +154,9 @@ _WRIST_NARROWING = 0.85
 _WRIST_CUT_M = 0.04
 _FLIP_FRAMES = 3
 _FOREARM_SIDE_M = 0.015
+# A palm core of fewer pixels is no palm (a palm seen edge-on): the maximum stands.
+_CORE_MIN_PIXELS = 30
+_CORE_BLEND_PER_FRAME = 0.2
 
 
 @dataclass
@@ -171,6 +196,10 @@ class DepthHandTracker:
         self._flip_votes = 0  # successive frames whose width profile turned that axis over
         self._last_position = None
         self._last_surface = None  # seen palm surface of the previous frame (optical)
+        # How much of the palm core's correction the reported palm carries (0-1), and the
+        # correction last measured: see _palm_core.
+        self._core_weight = 0.0
+        self._core_offset = np.zeros(3)
         self._hand_id = 0
         self.last_reason = ""
 
@@ -180,6 +209,8 @@ class DepthHandTracker:
         self._last_arm = None
         self._last_position = None
         self._last_surface = None
+        self._core_weight = 0.0
+        self._core_offset = np.zeros(3)
 
     def _rays(self, intr: Intrinsics):
         key = (intr.fx, intr.fy, intr.cx, intr.cy, intr.width, intr.height)
@@ -230,6 +261,8 @@ class DepthHandTracker:
         self._last_arm = None
         self._last_position = None
         self._last_surface = None
+        self._core_weight = 0.0
+        self._core_offset = np.zeros(3)
 
     def _hand_type(self, position_opt) -> str:
         mode = self.config["hand_type"]
@@ -353,6 +386,37 @@ class DepthHandTracker:
         wrist = s_lo + (narrow[0] + 4) * _SECTION_M
         return arm, profiled, (mean, wrist)
 
+    def _palm_core(self, centre, z, filled, dist, front, wrist, arm, xs, ys, intr):
+        """The seen palm surface's centre as the centroid of the palm's core, or None when
+        the core is too small (a palm seen edge-on).
+
+        The maximum of the distance transform is the middle of the widest disc that fits in
+        the silhouette: it slides toward the fingers when they are held together (a plate as
+        wide as the palm) and across the palm as it tilts. The core is every blob pixel at
+        least ``palm_core_width_m`` inside the outline (no single finger is that wide), on the
+        hand's side of the wrist and within ``palm_core_radius_m`` of the maximum; its 3-D
+        centroid follows the whole palm instead of its widest point. Without a wrist the
+        forearm's thick end would join the core, so the caller asks only when the width
+        profile found one."""
+        c = self.config
+        deepest = front + c["palm_search_depth_m"]
+        # Only pixels that can be wide enough at the deepest depth searched: few, the palm's
+        # middle, so the rest is done on them alone.
+        rows, cols = np.nonzero(dist >= c["palm_core_width_m"] * intr.fx / deepest)
+        depth = z[rows, cols]
+        keep = (depth > 0) & (depth < deepest) & filled[rows, cols].view(bool)
+        rows, cols, depth = rows[keep], cols[keep], depth[keep]
+        keep = dist[rows, cols] * depth / intr.fx >= c["palm_core_width_m"]  # pixels to metres at their depth
+        pts = np.column_stack((xs[cols[keep]] * depth[keep], ys[rows[keep]] * depth[keep], depth[keep]))
+        offsets = pts - centre
+        mean, s_wrist = wrist
+        core = (np.einsum("ij,ij->i", offsets, offsets) <= c["palm_core_radius_m"] ** 2) & (
+            (pts - mean) @ arm >= s_wrist + c["palm_core_wrist_margin_m"]
+        )
+        if int(np.count_nonzero(core)) < _CORE_MIN_PIXELS:
+            return None
+        return pts[core].mean(axis=0)
+
     def _measure(self, depth, labels, stats, label, intr, xs, ys):
         """(palm centre, optical rotation, grab) of one blob, or None."""
         c = self.config
@@ -417,6 +481,9 @@ class DepthHandTracker:
             return None
         zc = float(np.median(patch))
         centre = np.array([(u - intr.cx) / intr.fx * zc, (v - intr.cy) / intr.fy * zc, zc])
+        core = None
+        if c["palm_core_width_m"] > 0 and wrist is not None and arm is not None:
+            core = self._palm_core(centre, z, filled, dist, front, wrist, arm, xs[l0:l1], ys[t0:t1], intr)
         if arm is not None:
             # Without a clear forearm in the first frame, the palm found says which end
             # holds the fingers.
@@ -455,6 +522,14 @@ class DepthHandTracker:
         # normal: the ray through the surface point meets it h / cos(tilt) further on (the
         # tilt capped at 60 degrees, where the normal is least sure).
         self._last_surface = centre
-        ray = centre / np.linalg.norm(centre)
-        centre = centre + ray * c["palm_half_thickness_m"] / max(abs(float(ray @ normal)), 0.5)
-        return centre, rotation, grab
+        # The reported palm moves to the core's centroid, and back to the maximum when a
+        # frame has no core, by at most _CORE_BLEND_PER_FRAME of the difference a frame: the
+        # two differ by several millimetres, and switching outright would step the palm.
+        if core is not None:
+            self._core_offset = core - centre
+        step = (1.0 if core is not None else 0.0) - self._core_weight
+        self._core_weight += float(np.clip(step, -_CORE_BLEND_PER_FRAME, _CORE_BLEND_PER_FRAME))
+        surface = centre + self._core_weight * self._core_offset
+        ray = surface / np.linalg.norm(surface)
+        palm_centre = surface + ray * c["palm_half_thickness_m"] / max(abs(float(ray @ normal)), 0.5)
+        return palm_centre, rotation, grab
