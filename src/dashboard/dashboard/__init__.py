@@ -11,7 +11,8 @@ Its modules, by role:
   ``event_log`` (the bounded log, newest first), ``robot_view`` (the arm's links and
   joint readings from the URDF's forward kinematics), ``readings`` (message contents as
   the page shows them), ``status_style`` (the teleop status's name and colour),
-  ``episodes`` (the episode recorder's messages as the episode panel shows them);
+  ``episodes`` (the episode recorder's messages as the episode panel shows them), ``tray``
+  (the kitting tray's filled slots as the kitting panel shows them);
 - rules and actions (plain Python): ``controls`` (which controls can act now, and why
   not; the check of a typed speed ratio), ``application`` (which panels each
   application shows), ``jobs`` (program runs and kitting campaigns as child processes), ``programs``
@@ -41,6 +42,8 @@ _PUBLIC = {
     "panels_for": "application",
     "device_label": "readings",
     "image_data_url": "readings",
+    "parse_tray": "tray",
+    "tray_text": "tray",
     "check_speed_ratio": "controls",
     "RatioDecision": "controls",
     "LatencyWindow": "readings",

@@ -41,7 +41,7 @@ def control_states(
     """Enabled/reason of every control from a state snapshot's values and the running jobs.
 
     Keys read: status (TeleopStatus code), engage_mode, stop_latched, server_up,
-    speed_ratio, filter, kitting_cell.
+    speed_ratio, filter, kitting_cell, tray (dashboard.tray.parse_tray's), episodes_status.
     """
     status = values.get("status")
     latched = bool(values.get("stop_latched"))
@@ -95,6 +95,11 @@ def control_states(
             (program_job, "a program run is in progress"),
         ),
         "campaign_end": _first((not campaign_job, "no campaign is running")),
+        "tray_swapped": _first(
+            (values.get("tray") is None, "no kitting node (no /kitting/tray)"),
+            (campaign_job, "the campaign swaps the tray itself"),
+            (not (values.get("tray") or {}).get("filled"), "the tray is empty"),
+        ),
         **episode_states(values.get("episodes_status")),
     }
 

@@ -14,7 +14,7 @@ import threading
 import numpy as np
 import rospy
 import rosservice
-from std_msgs.msg import Bool, Float64, String
+from std_msgs.msg import Bool, Empty, Float64, String
 
 from dashboard.interfaces import DASHBOARD
 from motion_commander.config import TELEOP_PARAMETERS
@@ -31,6 +31,7 @@ from .episodes import parse_episode_message
 from .jobs import Job, campaign_command, run_program_command
 from .readings import campaign_line, driver_status, kitting_event_line, sequencer_counters, tool_reading
 from .state import DashboardState
+from .tray import parse_tray, tray_text
 
 LATCH_SERVICE = "motion_controller/latch_stop"
 SPAWN_SERVICE = "kitting_cell_sim/spawn"
@@ -62,6 +63,7 @@ class DashboardNode:
         self.ratio_pub = publisher(DASHBOARD, "motion_commander/set_speed_ratio", queue_size=1)
         self.filter_pub = publisher(DASHBOARD, "motion_sensor/set_filter", queue_size=1)
         self.campaign_stop_pub = publisher(DASHBOARD, "kitting_trials/stop", queue_size=1)
+        self.tray_swapped_pub = publisher(DASHBOARD, "kitting/tray_swapped", queue_size=1)
         self.episode_pub = publisher(DASHBOARD, "episodes/command", queue_size=5)
         self.latch = service_proxy(DASHBOARD, LATCH_SERVICE)
         s = self.state
@@ -88,6 +90,7 @@ class DashboardNode:
         subscribe("kitting_trials/progress", lambda m: self.on_campaign("campaign_progress", m), queue_size=5)
         subscribe("kitting_trials/result", lambda m: self.on_campaign("campaign_result", m), queue_size=5)
         subscribe("kitting/events", self.on_kitting_event, queue_size=20)
+        subscribe("kitting/tray", self.on_tray, queue_size=5)
         # One frame at a time, the newest: a slow page never queues camera frames.
         subscribe("kitting/vision/annotated", self.on_camera, queue_size=1, buff_size=2**22)
         self.poll(None)
@@ -137,6 +140,15 @@ class DashboardNode:
         self.state.set("driver", driver)
         # The reading changes with every message; the log gets a line only when the fault does.
         self.state.set_watched("driver_problem", problem, "driver", problem or "no fault")
+
+    def on_tray(self, msg):
+        tray, reason = parse_tray(msg.data)
+        if tray is None:
+            rospy.logwarn_throttle(10.0, "dashboard: kitting/tray refused: %s", reason)
+            return
+        if tray["complete"] and not (self.state.get("tray") or {}).get("complete"):
+            self.state.log("kitting", tray_text(tray))
+        self.state.set("tray", tray)
 
     def on_campaign(self, key, msg):
         try:
@@ -241,6 +253,11 @@ class DashboardNode:
         except ValueError as exc:
             return str(exc)
         return self._start("campaign", command, f"campaign of {trials} trials started", self.on_campaign_exit)
+
+    def tray_swapped(self) -> str:
+        """Tell the kitting node the finished kit's tray was taken away: every slot is free."""
+        self.tray_swapped_pub.publish(Empty())
+        return "tray swapped: every slot is free again"
 
     def end_campaign(self) -> str:
         """Ask the campaign to end after reporting the trials so far."""

@@ -27,6 +27,7 @@ DASHBOARD = NodeInterface(
         Topic("motion_commander/set_speed_ratio", "std_msgs/Float64", "a new speed ratio"),
         Topic("motion_sensor/set_filter", "std_msgs/String", "a new filter"),
         Topic("kitting_trials/stop", "std_msgs/Bool", "stop a running campaign"),
+        Topic("kitting/tray_swapped", "std_msgs/Empty", "the finished kit's tray was taken away (Tray swapped)"),
         Topic("episodes/command", "std_msgs/String", "start, stop, discard, success, failure (episode panel)"),
     ),
     subscribes=(
@@ -48,6 +49,7 @@ DASHBOARD = NodeInterface(
         _in("episodes/list", "std_msgs/String", "the recorded episodes (episode panel)"),
         _in("kitting_trials/progress", "std_msgs/String", "campaign progress"),
         _in("kitting_trials/result", "std_msgs/String", "campaign result"),
+        _in("kitting/tray", "std_msgs/String", "the kitting tray's filled slots (kitting panel)"),
         _in("kitting/events", "kitting/KittingEvent", "the kitting cell's picks, places and misses (event log)"),
         _in(
             "kitting/vision/annotated",

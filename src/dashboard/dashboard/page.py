@@ -22,6 +22,7 @@ from .controls import control_states
 from .episodes import episode_rows, episode_status_text
 from .readings import device_label, image_data_url, kit_score_text
 from .status_style import STATUS_COLOURS, status_view
+from .tray import tray_text
 
 __all__ = ["DashboardPage", "serve"]
 
@@ -353,6 +354,12 @@ class DashboardPage:
             self._reason("campaign_start")
             self._reason("campaign_end")
             self.campaign_label = _tid(ui.label("-"), "campaign").classes("text-body2")
+            with ui.row().classes("items-center"):
+                self.tray_label = _tid(ui.label(tray_text(None)), "tray").classes("text-body2")
+                self.buttons["tray_swapped"] = _tid(
+                    ui.button("Tray swapped", on_click=self.on_tray_swapped), "tray-swapped"
+                )
+            self._reason("tray_swapped")
             self.class_table = _tid(
                 ui.table(
                     columns=[
@@ -586,6 +593,7 @@ class DashboardPage:
         elif progress and kit_score_text(progress):
             status = f"{status}{kit_score_text(progress)}"
         self.campaign_label.set_text(status)
+        self.tray_label.set_text(tray_text(values.get("tray")))
         if progress and "per_class" in progress:
             rows = [
                 {
@@ -674,6 +682,9 @@ class DashboardPage:
 
     async def on_campaign_end(self):
         ui.notify(await run.io_bound(self.actions.end_campaign))
+
+    async def on_tray_swapped(self):
+        ui.notify(await run.io_bound(self.actions.tray_swapped))
 
     async def on_episode(self, word: str):
         ui.notify(await run.io_bound(self.actions.episode_command, word))

@@ -29,6 +29,12 @@ _TRAY_SWAPPED = Topic(
     "std_msgs/Empty",
     "the finished kit's tray was taken away: every slot is free again (one part per slot until then)",
 )
+_TRAY = Topic(
+    "kitting/tray",
+    "std_msgs/String",
+    'the tray since the last swap, JSON: {"slots": [class, ...], "filled": [class, ...], "complete": bool}',
+    latched=True,
+)
 _JOINTS = Topic("joint_states", "sensor_msgs/JointState", "the arm's measured joints (where the arm is in the image)")
 _VISION_STATUS = Topic(
     "kitting/vision/status", "diagnostic_msgs/DiagnosticStatus", "registration and detection state", latched=True
@@ -181,7 +187,7 @@ KITTING_NODE = NodeInterface(
             Param("slot_program", "", doc="a taught program whose waypoints become the tray slots"),
         ]
     ),
-    publishes=(_EVENTS, _READY),
+    publishes=(_EVENTS, _READY, _TRAY),
     subscribes=(
         _STOP_LATCHED,
         _PARTS,

@@ -265,6 +265,7 @@ class KittingPicker:
         on_event: Callable[[KittingEvent], None] = lambda event: None,
         source: str = "kitting parameters",
         part_present: Callable[[], bool | None] = lambda: None,
+        on_tray: Callable[[dict], None] = lambda tray: None,
     ):
         self.params = PICKER_SCHEMA.validate(params or {}, source)
         if self.params["pick_window"][1] <= self.params["pick_window"][0]:
@@ -272,6 +273,7 @@ class KittingPicker:
         self.cell, self.controller = cell, controller
         self.tracker = BeltTracker(dict(tracker_params or {}, initial_speed=cell.belt.speed))
         self.clock, self.sleep, self.on_event = clock, sleep, on_event
+        self.on_tray = on_tray  # called with tray_state() whenever a slot fills or the tray is swapped
         self.part_present = part_present  # the gripper's part sensor: True, False, None (no reading)
         self.obstacles = cell_obstacles(cell)
         self.descent_time = self.params["descent_time"]
@@ -343,6 +345,15 @@ class KittingPicker:
         """The finished kit's tray was taken away: every slot is free again."""
         with self.lock:
             self.filled.clear()
+        self.on_tray(self.tray_state())
+
+    def tray_state(self) -> dict:
+        """The tray as the operator needs it: its slots' classes in order, those filled since
+        the last swap, and whether the kit is complete (every slot filled: swap the tray)."""
+        slots = [slot.part_class for slot in self.cell.tray.slots]
+        with self.lock:
+            filled = [name for name in slots if name in self.filled]
+        return {"slots": slots, "filled": filled, "complete": len(filled) == len(slots)}
 
     def _slot_free(self, class_name: str) -> bool:
         return self.cell.tray.slot_for(class_name).part_class not in self.filled
@@ -582,6 +593,7 @@ class KittingPicker:
         self.holding = None
         with self.lock:
             self.filled.add(slot.part_class)  # whatever landed there, the slot is taken
+        self.on_tray(self.tray_state())
         self._move_l(above)
         if phases is not None:
             phases["release"] = self.clock() - began

@@ -99,3 +99,12 @@ def test_token_check():
     assert token_accepted("0123456789abcdef", "0123456789abcdef")
     assert not token_accepted("0123456789abcdef", "")
     assert not token_accepted("0123456789abcdef", "0123456789abcdeX")
+
+
+def test_tray_swapped_needs_a_filled_tray_and_no_campaign():
+    assert "kitting node" in states()["tray_swapped"].reason
+    empty = {"slots": ["bolt_silver"], "filled": [], "complete": False}
+    full = {"slots": ["bolt_silver"], "filled": ["bolt_silver"], "complete": True}
+    assert "empty" in control_states(dict(RUNNING, tray=empty))["tray_swapped"].reason
+    assert control_states(dict(RUNNING, tray=full))["tray_swapped"].enabled
+    assert "itself" in control_states(dict(RUNNING, tray=full), campaign_job=True)["tray_swapped"].reason

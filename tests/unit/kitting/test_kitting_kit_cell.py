@@ -31,23 +31,39 @@ def cell():
 
 def test_one_part_per_slot_until_the_tray_is_swapped(cell):
     sim, fake, picker, events = _closed_loop(cell)
+    trays = []  # what the node publishes on kitting/tray
+    picker.on_tray = trays.append
+    slots = [slot.part_class for slot in cell.tray.slots]
     try:
         first = sim.spawn("nut_yellow", y_offset=0.03)
         _run(picker, fake, events, END)
         assert events[-1].event == "placed" and picker.filled == {"nut_yellow"}
+        assert trays == [{"slots": slots, "filled": ["nut_yellow"], "complete": False}]
         second = sim.spawn("nut_yellow", y_offset=-0.03)
         fake.sleep(12.0)  # into the pick window and beyond: its slot is full, it is left alone
         assert picker.run_once() is None
         assert [e.event for e in events].count("placed") == 1 and picker.candidates() == []
         assert _state(sim, second).state == "belt"
         picker.tray_swapped()
-        assert picker.filled == set()
+        assert picker.filled == set() and trays[-1]["filled"] == [] and not trays[-1]["complete"]
         third = sim.spawn("nut_yellow")
         events.clear()
         _run(picker, fake, events, END, timeout=fake.t + 40.0)
         assert events[-1].event == "placed"
         fake.sleep(1.0)
         assert _state(sim, first).slot == "nut_yellow" and _state(sim, third).slot == "nut_yellow"
+    finally:
+        sim.close()
+
+
+def test_the_tray_state_says_when_the_kit_is_complete(cell):
+    sim, fake, picker, events = _closed_loop(cell)
+    try:
+        slots = [slot.part_class for slot in cell.tray.slots]
+        picker.filled.update(slots[:-1])
+        assert picker.tray_state() == {"slots": slots, "filled": slots[:-1], "complete": False}
+        picker.filled.add(slots[-1])
+        assert picker.tray_state()["complete"]
     finally:
         sim.close()
 
