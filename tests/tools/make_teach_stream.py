@@ -12,17 +12,19 @@ Every frame is a real frame of tests/data/{grab,pinch,Waiting-110fps}.jsonl.gz (
 Motion's leapjs-playback recordings, Apache-2.0, see tests/data/README.md): its hand
 shape (grabStrength, pinchStrength, palm normal and direction, fingers, confidence) is
 kept as recorded, closing and opening sequences play in recorded order, a held fist or
-pinch cycles through the recording's fully closed frames. Only the palm's slow path is
+pinch goes back and forth through the recording's fully closed frames (a shape held again
+goes on where it stopped). Only the palm's slow path is
 replaced: palmPosition = the designed path + the source frame's own tremor (its palm
 minus its 0.3 s moving average), and every finger position moves with the palm. The hand
 id is made constant (one hand throughout) and frames are re-stamped at 110 fps.
 
 Where two frames that follow each other in the stream are not neighbours in their
-recording (a pool cycling round, a pool made of two stretches, a segment or a shape
-starting), their tremors differ by up to 14 mm: a palm that teleports in 9 ms, which no
-hand does and which the core turned into a jumping command. There the tremor continues
-from the frame before and the difference fades out over ``SEAM_S`` (a minimum-jerk
-ease), so the palm's path stays one a hand can make.
+recording (a pool made of two stretches, a shape starting), their tremors differ by up to
+14 mm: a palm that teleports in 9 ms, which no hand does and which the core turned into a
+jumping command. There the tremor continues from the frame before and the difference
+fades out over ``SEAM_S`` (a minimum-jerk ease), so the palm's path stays one a hand can
+make. A pool is not cycled round (its last frame to its first: the 14 mm seams were
+those) but played back and forth, so that a held hand stays as still as it was recorded.
 
 Run: .venv/bin/python tests/tools/make_teach_stream.py [--output PATH] (deterministic).
 """
@@ -114,8 +116,11 @@ def tremor(frames, window_s=0.3):
     return palms - smooth
 
 
-def select(frames, keep):
-    return [i for i, f in enumerate(frames) if keep(f["hands"][0])]
+def select(frames, keep, margin=int(0.3 * FPS / 2)):
+    """The frames whose hand ``keep`` takes, but those within half the tremor's window of
+    the recording's ends, where the moving average is cut short and the "tremor" is the
+    hand's motion (up to 13 mm)."""
+    return [i for i, f in enumerate(frames) if margin <= i < len(frames) - margin and keep(f["hands"][0])]
 
 
 def min_jerk(fraction):
@@ -151,9 +156,14 @@ class Sources:
                 raise SystemExit(f"no source frames for shape {name!r}")
 
     def frame(self, shape, k):
-        """The k-th frame of a shape's pool (cycling), its tremor (mm) and where it comes
-        from, (recording, index)."""
-        recording, index = self.pools[shape][k % len(self.pools[shape])]
+        """The k-th frame of a shape's pool, its tremor (mm) and where it comes from,
+        (recording, index). A pool played longer than it lasts goes back and forth through
+        it (the frame after its last is the one before its last, a neighbour), not round
+        to its first."""
+        pool = self.pools[shape]
+        turn = max(1, 2 * (len(pool) - 1))
+        k %= turn
+        recording, index = pool[k if k < len(pool) else turn - k]
         return self.recordings[recording][index], self.tremors[recording][index], (recording, index)
 
 
@@ -171,7 +181,7 @@ class SeamlessTremor:
 
     def __call__(self, jitter, origin):
         recording, index = origin
-        if self.previous is not None and self.previous != (recording, index - 1):
+        if self.previous is not None and self.previous not in ((recording, index - 1), (recording, index + 1)):
             self.carry, self.since = self.last - jitter, 0
         fade = 1.0 - min_jerk(self.since / self.fade_frames)
         self.last = jitter + self.carry * fade
@@ -183,6 +193,7 @@ def build():
     """The stream's JSON lines (handshake first)."""
     sources = Sources()
     seamless = SeamlessTremor()
+    played = dict.fromkeys(sources.pools, 0)  # frames of each pool played so far: a shape held again goes on
     lines = [json.dumps({"version": 6})]
     position = np.zeros(3)
     stamp_us, frame_id = 1_000_000.0, 1
@@ -199,7 +210,8 @@ def build():
                 # (as the shipped circle templates): "right" is -y, "up" is +z.
                 angle = np.pi / 2 - 2 * np.pi * min_jerk(fraction)
                 offset = offset + CIRCLE_RADIUS * np.array([0.0, -np.cos(angle), np.sin(angle) - 1.0])
-            source, jitter, origin = sources.frame(shape, k)
+            source, jitter, origin = sources.frame(shape, played[shape])
+            played[shape] += 1
             jitter = seamless(jitter, origin)
             lines.append(
                 json.dumps(relocate(source, HAND_ORIGIN_LEAP + REP103_TO_LEAP @ offset + jitter, stamp_us, frame_id))
