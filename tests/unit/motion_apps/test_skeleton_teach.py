@@ -9,6 +9,7 @@ import os
 import sys
 
 import numpy as np
+import yaml
 
 from motion_apps.teach import TeachSession, load_gesture_config
 from motion_sensor.gestures.skeleton_classifier import SkeletonClassifier
@@ -22,6 +23,7 @@ sys.path.insert(0, os.path.join(ROOT, "tests", "tools"))
 import make_skeleton_teach_stream  # noqa: E402
 
 COMMANDS = os.path.join(ROOT, "src", "motion_apps", "config", "skeleton_gesture_commands.yaml")
+TEACH_SPOTTER = os.path.join(ROOT, "src", "motion_apps", "config", "skeleton_teach_spotter.yaml")
 DEMO = os.path.join(ROOT, "src", "motion_apps", "data", "skeleton_teach_demo.npz")
 ORDER = ("tap", "grab", "expand", "swipe_left", "shake")
 
@@ -79,9 +81,10 @@ def test_shipped_skeleton_teach_stream_is_what_the_generator_writes(tmp_path):
 
 
 def test_skeleton_teach_stream_teaches_at_the_designed_places():
-    """As shrec_stream_driver plays it (file order, 1.2 s rests): every gesture is spotted
-    with its label, and the palm, moved as the tool follows it, is where the command
-    must be taken (within 1 cm): the grip at the part, the release at the place."""
+    """As shrec_stream_driver plays it (file order, 1.2 s rests) and the teach session's
+    spotter settings take it: every gesture is spotted with its label, and the palm, moved
+    as the tool follows it, is where the command must be taken (within 1 cm): the grip at
+    the part, the release at the place."""
     data = load_skeleton_dataset(DEMO)
     script = make_skeleton_teach_stream.SCRIPT
     assert [CLASSES_14[k] for k in data.label14] == [label for _, label, _ in script]
@@ -93,7 +96,10 @@ def test_skeleton_teach_stream_teaches_at_the_designed_places():
         order=range(len(data)),
     )
     config = load_gesture_config(COMMANDS)
-    spotter = SkeletonSpotter(SkeletonClassifier(), {"labels": sorted(config["commands"])})
+    with open(TEACH_SPOTTER, encoding="utf-8") as handle:
+        settings = yaml.safe_load(handle)
+    assert sorted(settings["labels"]) == sorted(config["commands"])
+    spotter = SkeletonSpotter(SkeletonClassifier(), settings)
     found = []
     for stamp, frame in zip(stamps, joints, strict=True):
         found += [(e.name, frame[1] - joints[0, 1]) for e in spotter.update(stamp, frame)]
