@@ -17,6 +17,8 @@ Its modules:
 - ``skeleton_training``: training, augmentation and ONNX export (torch, training only);
 - ``skeleton_negatives``: motion that is no gesture (real Leap runs, transitions between
   gestures), which the training teaches the network to reject;
+- ``skeleton_spotted_windows``: training windows cut from streams the way the spotter cuts
+  them (training only; off in the shipped recipe);
 - ``train_skeleton_gestures``: the training command (user-independent estimate, export);
 - ``skeleton_eval``: ``gesture_eval --skeleton``, the shipped model on a .npz;
 - ``skeleton_spotter``: online spotting of skeleton gestures (motion between two rests);
