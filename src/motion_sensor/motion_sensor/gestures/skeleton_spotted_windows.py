@@ -25,14 +25,16 @@ __all__ = ["SpottedWindows", "spotted_windows"]
 
 
 class _Recorder:
-    """A classifier stand-in: keeps the windows and answers uniformly, so the spotter
-    reports nothing and no refractory period hides the next segment."""
+    """A classifier stand-in: keeps the windows it is given, each with the index of the
+    stream frame being taken then (``now``), and answers uniformly, so the spotter reports
+    nothing and no refractory period hides the next segment."""
 
     def __init__(self):
         self.windows = []
+        self.now = 0
 
     def classify_batch(self, sequences):
-        self.windows.extend(sequences)
+        self.windows.extend((window, self.now) for window in sequences)
         return [SkeletonResult(np.full(14, 1.0 / 14), np.full(28, 1.0 / 28)) for _ in sequences]
 
 
@@ -69,32 +71,13 @@ def spotted_windows(dataset, rng, orders=1, min_cover=0.5, params=None, rate=30.
             recorder = _Recorder()
             spotter = SkeletonSpotter(recorder, params)
             for now, (stamp, frame) in enumerate(zip(stamps, joints, strict=True)):
-                before = len(recorder.windows)
+                recorder.now = now
                 spotter.update(stamp, frame)
-                for window in recorder.windows[before:]:
-                    end = _end_index(joints, now, window[-1])
-                    _label(
-                        window,
-                        stamps[end - len(window) + 1],
-                        stamps[end],
-                        truth,
-                        dataset,
-                        min_cover,
-                        out=(windows, label14, label28, cover),
-                    )
-            before = len(recorder.windows)
             spotter.finish()
-            for window in recorder.windows[before:]:
-                end = _end_index(joints, len(joints) - 1, window[-1])
-                _label(
-                    window,
-                    stamps[end - len(window) + 1],
-                    stamps[end],
-                    truth,
-                    dataset,
-                    min_cover,
-                    out=(windows, label14, label28, cover),
-                )
+            for window, now in recorder.windows:
+                end = _end_index(joints, now, window[-1])
+                start = stamps[end - len(window) + 1]
+                _label(window, start, stamps[end], truth, dataset, min_cover, out=(windows, label14, label28, cover))
     return SpottedWindows(windows, label14, label28, cover)
 
 
