@@ -264,3 +264,18 @@ def test_a_window_where_a_gesture_outside_the_labels_is_likely_does_not_count():
     assert [e.name for e in events] == ["grab"]
     with pytest.raises(ParameterError, match="max_other_probability"):
         SkeletonSpotter(PinchWeighed(False), {"max_other_probability": 0.0})
+
+
+def test_a_longer_pause_keeps_a_gesture_the_hand_pauses_in_one_segment():
+    """A gesture with a brief stop in it (the hand still for 0.55 s between two moves):
+    the spotter's default 0.3 s rest cuts it in two segments, each classified on its own;
+    the teach settings' 0.45 s keeps it one."""
+    stamps, frames = _hand_stream(moves=[3.0, 4.15])
+    segments = {}
+    for pause in (0.3, 0.45):
+        spotter = SkeletonSpotter(StandIn(), {"pause_s": pause})
+        for stamp, frame in zip(stamps, frames, strict=True):
+            spotter.update(stamp, frame)
+        spotter.finish()
+        segments[pause] = spotter.counters["segments"]
+    assert segments == {0.3: 2, 0.45: 1}
