@@ -117,6 +117,48 @@ def path_errors(seen, truth, sequence, hand):
     }
 
 
+# SHREC joints the hand's axes come from: wrist, palm centre, index, middle and little
+# finger bases.
+HAND_AXES_JOINTS = (0, 1, 6, 10, 18)
+TILT_BINS_DEG = (0, 25, 50, 70, 90)
+
+
+def hand_axes_errors(seen, skeletons, sequence, hand):
+    """Where the per-sequence aligned palm error lies: RMS (mm) along the hand (wrist to
+    middle finger base), across it and along the palm normal, and by the palm's tilt (the
+    angle between its normal and the line of sight): share of frames, RMS, share of the
+    squared error."""
+    ok = ~np.isnan(seen[:, 0]) & hand
+    error = seen - skeletons[:, 1]
+    aligned = np.zeros_like(error)
+    for s in np.unique(sequence[ok]):
+        mine = ok & (sequence == s)
+        aligned[mine] = error[mine] - error[mine].mean(axis=0)
+    along = skeletons[:, 3] - skeletons[:, 0]
+    along /= np.linalg.norm(along, axis=1, keepdims=True)
+    normal = np.cross(skeletons[:, 2] - skeletons[:, 0], skeletons[:, 4] - skeletons[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    across = np.cross(normal, along)
+    parts = {
+        name: float(np.sqrt(np.mean(np.einsum("ij,ij->i", aligned[ok], axis[ok]) ** 2)) * 1000)
+        for name, axis in (("along_hand", along), ("across_hand", across), ("palm_normal", normal))
+    }
+    squared = np.einsum("ij,ij->i", aligned[ok], aligned[ok]) * 1e6
+    tilt = np.degrees(np.arccos(np.clip(np.abs(normal[ok, 2]), 0.0, 1.0)))
+    bins = []
+    for low, high in zip(TILT_BINS_DEG[:-1], TILT_BINS_DEG[1:]):
+        mine = (tilt >= low) & (tilt < high) if high < 90 else (tilt >= low)
+        bins.append(
+            {
+                "tilt_deg": [low, high],
+                "frames_fraction": round(float(mine.mean()), 3),
+                "rms_mm": round(float(np.sqrt(squared[mine].mean())), 2) if mine.any() else None,
+                "squared_error_share": round(float(squared[mine].sum() / squared.sum()), 3),
+            }
+        )
+    return {"rms_mm": {k: round(v, 2) for k, v in parts.items()}, "by_tilt": bins}
+
+
 def real_motion(args, reference):
     """The real-motion part (see the module), or a 'skipped' string."""
     data = shrec_hands.load()
@@ -135,7 +177,7 @@ def real_motion(args, reference):
     total = sum(len(s.joints) for s in tune + held_out)
     done = 0
     for name, sequences in (("tuning_set", tune), ("evaluation_set", held_out)):
-        truth, seqs, hand = [], [], []
+        truth, seqs, hand, skeletons = [], [], [], []
         seen = {"tracker": [], "nearest_blob": [], "reference": []}
         costs = {"tracker": [], "reference": []}
         for index, sequence in enumerate(sequences):
@@ -152,6 +194,7 @@ def real_motion(args, reference):
                     and config["min_depth_m"] < palm[2] < config["max_depth_m"]
                 )
                 truth.append(palm)
+                skeletons.append(joints[list(HAND_AXES_JOINTS)])
                 seqs.append(index)
                 for key, which in (("tracker", tracker), ("reference", before)):
                     if which is None:
@@ -167,6 +210,7 @@ def real_motion(args, reference):
                 done += 1
             print(f"  real motion: {done}/{total} frames", flush=True)
         truth, seqs, hand = np.array(truth), np.array(seqs), np.array(hand, bool)
+        skeletons = np.array(skeletons)
         part = {
             "sequences": [s.describe() for s in sequences],
             "subjects": sorted({s.subject for s in sequences}),
@@ -176,8 +220,12 @@ def real_motion(args, reference):
             "nearest_blob_baseline": path_errors(np.array(seen["nearest_blob"], float), truth, seqs, hand),
         }
         part["tracker"]["per_frame_decode_and_track"] = stats_ms(costs["tracker"])
+        part["tracker"]["by_hand_axes"] = hand_axes_errors(np.array(seen["tracker"], float), skeletons, seqs, hand)
         if reference:
             part["reference"] = path_errors(np.array(seen["reference"], float), truth, seqs, hand)
+            part["reference"]["by_hand_axes"] = hand_axes_errors(
+                np.array(seen["reference"], float), skeletons, seqs, hand
+            )
             part["reference"]["per_frame_decode_and_track"] = stats_ms(costs["reference"])
         out[name] = part
     goals = {"per_sequence_rms_mm_max": 6.0, "per_sequence_p95_mm_max": 12.0, "found_fraction_min": 0.95}
@@ -365,6 +413,18 @@ def main():
                     f"mm; one offset RMS {figures['globally_aligned']['rms_mm']} mm; raw RMS "
                     f"{figures['raw']['rms_mm']} mm{cost_text}"
                 )
+                if "by_hand_axes" in figures:
+                    axes = figures["by_hand_axes"]
+                    print(
+                        f"  {'':13}  RMS along the hand / across / palm normal "
+                        + " / ".join(f"{v}" for v in axes["rms_mm"].values())
+                        + " mm; by tilt "
+                        + ", ".join(
+                            f"{b['tilt_deg'][0]}-{b['tilt_deg'][1]} deg: {b['rms_mm']} mm "
+                            f"({100 * b['frames_fraction']:.0f} % of frames)"
+                            for b in axes["by_tilt"]
+                        )
+                    )
         print(f"real-motion goals met      : {real['goals_met']}")
     elif real:
         print(real)

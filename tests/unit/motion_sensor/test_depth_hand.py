@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from motion_sensor.devices.depth_device import DepthMessage, DepthTopicDevice
-from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY, TRACKER_PARAMS, DepthHandTracker
+from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY, TRACKER_PARAMS, CoreBlend, DepthHandTracker
 from motion_sensor.devices.depth_image import (
     DepthImageError,
     decode_depth,
@@ -237,3 +237,27 @@ def test_topic_device_keeps_the_newest_images():
     assert device.read(0.0).stamp == 3.0 and device.read(0.0).stamp == 4.0
     assert device.counters["skipped"] == 2
     assert device.read(0.0) is None  # nothing queued: returns after wait_s
+
+
+def test_core_blend_follows_the_core_and_spreads_a_switch():
+    blend = CoreBlend(step_m=0.004)
+    centre = np.array([0.0, 0.0, 0.8])
+    core = centre + [0.0, 0.02, 0.0]
+    assert np.allclose(blend.update(centre, core), core)  # a new hand takes the core outright
+    moved = centre + [0.03, 0.0, 0.0]  # the maximum jumps, the core moves with the palm
+    assert np.allclose(blend.update(moved, core + [0.001, 0.0, 0.0]), core + [0.001, 0.0, 0.0])
+    last = core + [0.001, 0.0, 0.0]
+    # A frame without a core (the maximum where it was): 4 mm toward the maximum, no more.
+    out = blend.update(moved, None)
+    assert np.isclose(np.linalg.norm(out - last), 0.004)
+    # The core back with another correction: reached 4 mm a frame, then followed outright.
+    back = moved + [0.0, -0.02, 0.0]
+    steps = []
+    for _ in range(12):
+        new = blend.update(moved, back)
+        steps.append(np.linalg.norm(new - out))
+        out = new
+    assert max(steps) <= 0.004 + 1e-9 and np.allclose(out, back)
+    assert np.allclose(blend.update(moved, back + [0.0, 0.0, 0.01]), back + [0.0, 0.0, 0.01])
+    blend.reset()
+    assert np.allclose(blend.update(moved, None), moved)
