@@ -32,6 +32,18 @@ def _first(*rules) -> ControlState:
     return ON
 
 
+def _campaign_running(values) -> bool:
+    """A campaign's progress says trials remain and no result has come (one this page did not
+    start, e.g. scripts/kitting_sim)."""
+    progress = values.get("campaign_progress")
+    if not isinstance(progress, dict) or values.get("campaign_result") is not None:
+        return False
+    try:
+        return int(progress.get("done", 0)) < int(progress.get("trials", 0))
+    except (TypeError, ValueError):
+        return False
+
+
 def control_states(
     values: dict[str, object],
     program_job: bool = False,
@@ -41,7 +53,8 @@ def control_states(
     """Enabled/reason of every control from a state snapshot's values and the running jobs.
 
     Keys read: status (TeleopStatus code), engage_mode, stop_latched, server_up,
-    speed_ratio, filter, kitting_cell, tray (dashboard.tray.parse_tray's), episodes_status.
+    speed_ratio, filter, kitting_cell, tray (dashboard.tray.parse_tray's), campaign_progress,
+    campaign_result, episodes_status.
     """
     status = values.get("status")
     latched = bool(values.get("stop_latched"))
@@ -97,7 +110,7 @@ def control_states(
         "campaign_end": _first((not campaign_job, "no campaign is running")),
         "tray_swapped": _first(
             (values.get("tray") is None, "no kitting node (no /kitting/tray)"),
-            (campaign_job, "the campaign swaps the tray itself"),
+            (campaign_job or _campaign_running(values), "the campaign swaps the tray itself"),
             (not (values.get("tray") or {}).get("filled"), "the tray is empty"),
         ),
         **episode_states(values.get("episodes_status")),

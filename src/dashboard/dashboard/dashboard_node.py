@@ -28,7 +28,7 @@ from .application import detect_application
 from .config import DASHBOARD_PARAMETERS
 from .controls import check_speed_ratio
 from .episodes import parse_episode_message
-from .jobs import Job, campaign_command, run_program_command
+from .jobs import Job, campaign_command, campaign_summary, run_program_command
 from .readings import campaign_line, driver_status, kitting_event_line, sequencer_counters, tool_reading
 from .state import DashboardState
 from .tray import parse_tray, tray_text
@@ -160,17 +160,20 @@ class DashboardNode:
         self.state.log("campaign", campaign_line(key, data))
 
     def poll(self, _event):
-        """Once a second: which services exist, the core's engage mode and, unless the
-        launch named it, the application (from the topics published now)."""
+        """Once a second: which services exist, the core's engage mode, unless the launch
+        named it the application (from the topics published now), and whether a kitting
+        node still publishes the tray."""
         self.state.update(server_up=_service_exists(LATCH_SERVICE), kitting_cell=_service_exists(SPAWN_SERVICE))
         mode = self.params["engage_mode"] or rospy.get_param("motion_commander/engage", "")
         self.state.set("engage_mode", mode)
+        try:
+            topics = [name for name, _ in rospy.get_published_topics()]
+        except Exception:  # noqa: BLE001 - the master may be gone during shutdown: keep the last answer
+            return
         if self.params["application"] == "auto":
-            try:
-                topics = [name for name, _ in rospy.get_published_topics()]
-            except Exception:  # noqa: BLE001 - the master may be gone during shutdown: keep the last answer
-                return
             self.state.set("application", detect_application(topics))
+        if self.state.get("tray") is not None and rospy.resolve_name("kitting/tray") not in topics:
+            self.state.set("tray", None)  # the kitting node is gone: its latched tray is stale
 
     # -- actions (called by the page, off its event loop) ----------------------------------------
     def stop(self) -> str:
@@ -279,11 +282,7 @@ class DashboardNode:
     def on_campaign_exit(self, job):
         if self.state.get("campaign_result") is None:
             path = os.path.join(self.output_dir, "kitting_summary.json")
-            try:
-                with open(path, encoding="utf-8") as stream:
-                    self.state.set("campaign_result", json.load(stream))
-            except (OSError, ValueError) as exc:
-                self.state.set("campaign_result", {"error": f"campaign exited ({job.exit_code}), no summary: {exc}"})
+            self.state.set("campaign_result", campaign_summary(path, job.started, job.exit_code))
 
     def _start(self, kind, command, started, on_exit=None) -> str:
         with self.jobs_lock:

@@ -2,10 +2,12 @@
 campaign) as child processes: their output is kept for the page, and they are ended with
 SIGINT like roslaunch ends a node."""
 
+import json
 import os
 import signal
 import subprocess
 import threading
+import time
 from collections import deque
 from collections.abc import Callable, Sequence
 
@@ -21,6 +23,7 @@ class Job:
         self._lines = deque(maxlen=keep_lines)
         self._lock = threading.Lock()
         self._on_exit = on_exit
+        self.started = time.time()  # wall clock: what the job writes is newer than this
         # Its own process group, so an end reaches what it started too (rosrun's child).
         self.process = subprocess.Popen(
             self.command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1, start_new_session=True
@@ -96,3 +99,15 @@ def campaign_command(trials: int, seed: int, perturb: bool, output_dir: str) -> 
         f"_perturb:={'true' if perturb else 'false'}",
         f"_output_dir:={output_dir}",
     ]
+
+
+def campaign_summary(path: str, since: float, exit_code) -> dict:
+    """The summary a campaign started at ``since`` (wall clock) wrote to ``path``, or an
+    error: a file older than the campaign is an earlier run's, never this one's."""
+    try:
+        if os.path.getmtime(path) < since:
+            return {"error": f"campaign exited ({exit_code}) before writing a summary of this run"}
+        with open(path, encoding="utf-8") as stream:
+            return json.load(stream)
+    except (OSError, ValueError) as exc:
+        return {"error": f"campaign exited ({exit_code}), no summary: {exc}"}

@@ -20,9 +20,12 @@ def parse_tray(text: str):
         return None, "'slots' must be a non-empty list of class names"
     if not isinstance(filled, list) or not all(isinstance(name, str) and name in slots for name in filled):
         return None, "'filled' must list classes of the tray's slots"
-    complete = data.get("complete", len(set(filled)) == len(slots))
+    every = set(filled) == set(slots)
+    complete = data.get("complete", every)
     if not isinstance(complete, bool):
         return None, "'complete' must be true or false"
+    if complete != every:
+        return None, f"'complete' is {str(complete).lower()} with {len(set(filled))} of {len(slots)} slots filled"
     return {"slots": slots, "filled": filled, "complete": complete}, ""
 
 

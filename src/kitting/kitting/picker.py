@@ -289,6 +289,9 @@ class KittingPicker:
         self.lock = threading.Lock()
         self.recent = deque()  # (stamp, Observation) of the last 3 s: the miss check
         self.filled: set[str] = set()  # slots released into since the last tray swap
+        # Orders tray changes with their on_tray calls (the cycle thread fills, a callback
+        # swaps): the last state reported is always the tray's.
+        self.tray_lock = threading.Lock()
         self.last_image = -math.inf  # stamp of the newest processed image, parts or not
 
     # -- perception --------------------------------------------------------------------------
@@ -343,9 +346,10 @@ class KittingPicker:
     # -- the cycle ---------------------------------------------------------------------------
     def tray_swapped(self):
         """The finished kit's tray was taken away: every slot is free again."""
-        with self.lock:
-            self.filled.clear()
-        self.on_tray(self.tray_state())
+        with self.tray_lock:
+            with self.lock:
+                self.filled.clear()
+            self.on_tray(self.tray_state())
 
     def tray_state(self) -> dict:
         """The tray as the operator needs it: its slots' classes in order, those filled since
@@ -591,9 +595,10 @@ class KittingPicker:
         self._move_l(release)
         self._gripper(False)
         self.holding = None
-        with self.lock:
-            self.filled.add(slot.part_class)  # whatever landed there, the slot is taken
-        self.on_tray(self.tray_state())
+        with self.tray_lock:
+            with self.lock:
+                self.filled.add(slot.part_class)  # whatever landed there, the slot is taken
+            self.on_tray(self.tray_state())
         self._move_l(above)
         if phases is not None:
             phases["release"] = self.clock() - began

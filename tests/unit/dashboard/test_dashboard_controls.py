@@ -108,3 +108,11 @@ def test_tray_swapped_needs_a_filled_tray_and_no_campaign():
     assert "empty" in control_states(dict(RUNNING, tray=empty))["tray_swapped"].reason
     assert control_states(dict(RUNNING, tray=full))["tray_swapped"].enabled
     assert "itself" in control_states(dict(RUNNING, tray=full), campaign_job=True)["tray_swapped"].reason
+
+
+def test_tray_swapped_waits_for_a_campaign_the_page_did_not_start():
+    full = {"slots": ["bolt_silver"], "filled": ["bolt_silver"], "complete": True}
+    running = dict(RUNNING, tray=full, campaign_progress={"done": 2, "trials": 6})
+    assert "itself" in control_states(running)["tray_swapped"].reason
+    assert control_states(dict(running, campaign_result={"successes": 6}))["tray_swapped"].enabled
+    assert control_states(dict(running, campaign_progress={"done": 6, "trials": 6}))["tray_swapped"].enabled

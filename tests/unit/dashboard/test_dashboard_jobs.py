@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from dashboard.jobs import Job, campaign_command, run_program_command
+from dashboard.jobs import Job, campaign_command, campaign_summary, run_program_command
 from dashboard.programs import delete_program, list_programs, program_path
 from motion_commander.program import Program, Waypoint, save_program
 
@@ -82,3 +82,13 @@ def test_delete_only_names_inside_the_folder(tmp_path):
     assert delete_program(str(tmp_path), "pick") is None and not (tmp_path / "pick.yaml").exists()
     with pytest.raises(ValueError):
         program_path(str(tmp_path), "../x")
+
+
+def test_a_campaign_reads_only_the_summary_it_wrote(tmp_path):
+    path = tmp_path / "kitting_summary.json"
+    path.write_text('{"successes": 6, "trials": 6}\n')
+    os.utime(path, (1000.0, 1000.0))  # an earlier run's
+    assert "before writing a summary of this run" in campaign_summary(str(path), 2000.0, 1)["error"]
+    os.utime(path, (3000.0, 3000.0))
+    assert campaign_summary(str(path), 2000.0, 0) == {"successes": 6, "trials": 6}
+    assert "no summary" in campaign_summary(str(tmp_path / "none.json"), 2000.0, 2)["error"]

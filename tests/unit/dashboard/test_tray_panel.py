@@ -27,6 +27,7 @@ def test_a_tray_message_is_read():
         (json.dumps({"slots": SLOTS, "filled": ["gear"]}), "'filled'"),
         (json.dumps({"slots": SLOTS, "filled": "nut_yellow"}), "'filled'"),
         (json.dumps({"slots": SLOTS, "filled": [], "complete": "yes"}), "'complete'"),
+        (json.dumps({"slots": SLOTS, "filled": SLOTS[:1], "complete": True}), "1 of 3 slots"),
     ],
 )
 def test_a_malformed_tray_message_is_refused_with_the_reason(text, words):
