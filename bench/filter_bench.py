@@ -15,12 +15,16 @@ Two named sets of recordings:
 Their time lag is also measured on slow moves (a still-hand recording plus a ramp), where a
 speed-adaptive filter smooths most.
 
-Two references say what the evaluation set allows (``limits``):
-- a centred (non-causal, so unattainable live) Gaussian smoother at mean-10's jitter: the
-  lag left is the noise it removes, a floor for any filter at that jitter;
+What the evaluation set allows (``limits``):
+- a centred (non-causal, so not for live use) Gaussian smoother at mean-10's jitter: the
+  lag left is mostly the noise it removes, a reference for fixed smoothers (an adaptive
+  filter can do better: the default one_euro does on the tuning set);
 - the default one_euro's lag split by the hand's net speed over 0.2 s, next to the speeds a
   still recording's palm moves at: a speed gate can only cut the lag of moves faster than
-  the still hands it must hold steady.
+  the still hands it must hold steady;
+- every swept setting measured on the evaluation set too (never chosen there): the least
+  evaluation lag of those at least as steady as mean-10 there, and the steadiest of those
+  with a third of its lag.
 
 Run: bench/run filter_bench
 Writes bench/results/filter_bench.json and bench/results/filter_tradeoff.png.
@@ -158,6 +162,12 @@ def evaluate(data, produce, still=TUNING_STILL, moving=TUNING_MOVING):
     return float(jitter), float(lag)
 
 
+def _swept(data, filter_name, params, recording):
+    """Filtered positions of a recording with one swept parameter set."""
+    stamps, raw, _, quats = data[recording]
+    return run_filter(filter_name, params, stamps, raw, quats)
+
+
 def run_default(data, filter_name, recording):
     """Filtered positions of a recording with the filter's shipped defaults."""
     stamps, raw, _, quats = data[recording]
@@ -214,13 +224,18 @@ def main():
     curves = {}
     total = sum(len(sweep) for _, sweep in SWEEPS.values())
     done = 0
+    held_out = ([n for n in EVALUATION_STILL if n in data], [n for n in EVALUATION_MOVING if n in data])
     for curve, (name, sweep) in SWEEPS.items():
         curves[curve] = []
         for params in sweep:
-            jitter, lag = evaluate(
-                data, lambda n, name=name, params=params: run_filter(name, params, data[n][0], data[n][1], data[n][3])
-            )
-            curves[curve].append({"params": params, "jitter_mm": round(jitter, 4), "lag_mm": round(lag, 3)})
+            produce = functools.partial(_swept, data, name, params)
+            jitter, lag = evaluate(data, produce)
+            point = {"params": params, "jitter_mm": round(jitter, 4), "lag_mm": round(lag, 3)}
+            if all(held_out):
+                # Measured, never chosen on: what the evaluation set allows (see limits).
+                held_jitter, held_lag = evaluate(data, produce, *held_out)
+                point.update(evaluation_jitter_mm=round(held_jitter, 4), evaluation_lag_mm=round(held_lag, 3))
+            curves[curve].append(point)
             done += 1
             print(f"[{done:3d}/{total}] {curve:17s} {params}: jitter {jitter:.4f} mm, lag {lag:.2f} mm", flush=True)
     mean10 = next(c for c in curves["mean"] if c["params"]["queue_size"] == 10)
@@ -242,6 +257,7 @@ def main():
     results["shipped_defaults"] = check_defaults(data)
     results["shipped_defaults"]["evaluation_missing"] = missing
     results["limits"] = limits(data, mean10)
+    results["limits"]["evaluation_sweeps"] = evaluation_sweeps(curves, results["shipped_defaults"])
     write_results("filter_bench", results, show=False)
     plot(results, os.path.join(RESULTS, "filter_tradeoff.png"))
     summary = {name: {k: v for k, v in verdict.items() if k != "pareto"} for name, verdict in verdict.items()}
@@ -308,7 +324,7 @@ def net_speeds(stamps, positions, window=0.2):
 
 def centred_floor(data, still, moving, jitter_goal):
     """Lag of a centred Gaussian smoother whose jitter equals ``jitter_goal`` (interpolated
-    over its width): what a filter that could see the future would keep."""
+    over its width): what a fixed smoother that could see the future would keep."""
     from scipy.ndimage import gaussian_filter1d
 
     points = []
@@ -316,7 +332,30 @@ def centred_floor(data, still, moving, jitter_goal):
         smooth = functools.partial(gaussian_filter1d, sigma=sigma, axis=0, mode="nearest")
         points.append(evaluate(data, lambda n, smooth=smooth: smooth(data[n][1]), still, moving))
     jitters, lags = zip(*sorted(points))
+    if not jitters[0] <= jitter_goal <= jitters[-1]:
+        raise ValueError(f"jitter {jitter_goal:.3f} mm outside the widths' {jitters[0]:.3f}-{jitters[-1]:.3f} mm")
     return float(np.interp(jitter_goal, jitters, lags))
+
+
+def evaluation_sweeps(curves, defaults):
+    """Over every swept setting measured on the evaluation set: the least evaluation lag
+    among those no noisier there than mean-10 (and its ratio to mean-10's evaluation lag),
+    and the least evaluation jitter among those with at most a third of that lag."""
+    mean = defaults["mean"]
+    points = [p for curve in curves.values() for p in curve if "evaluation_lag_mm" in p]
+    if not points:
+        return None
+    steady = [p for p in points if p["evaluation_jitter_mm"] <= mean["evaluation_jitter_mm"]]
+    quick = [p for p in points if p["evaluation_lag_mm"] <= mean["evaluation_lag_mm"] / 3]
+    best = min(steady, key=lambda p: p["evaluation_lag_mm"]) if steady else None
+    steadiest = min(quick, key=lambda p: p["evaluation_jitter_mm"]) if quick else None
+    return {
+        "settings": len(points),
+        "least_lag_as_steady_as_mean10": best,
+        "least_lag_ratio_to_mean10": round(best["evaluation_lag_mm"] / mean["evaluation_lag_mm"], 3) if best else None,
+        "steadiest_with_a_third_of_the_lag": steadiest,
+        "mean10_evaluation_jitter_mm": mean["evaluation_jitter_mm"],
+    }
 
 
 def limits(data, mean10, speed_bins=(0.0, 0.02, 0.05, 0.08, 0.12, 0.2, 0.5, np.inf), skip=10):
