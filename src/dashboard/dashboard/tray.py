@@ -2,19 +2,16 @@
 ``kitting/tray`` message (JSON: the slots' classes, those filled since the last swap,
 whether the kit is complete) read and checked, and its one-line reading."""
 
-import json
+from .episodes import parse_episode_message as parse_json_message
 
 __all__ = ["parse_tray", "tray_text"]
 
 
 def parse_tray(text: str):
     """({"slots", "filled", "complete"}, "") from a ``kitting/tray`` message, or (None, why)."""
-    try:
-        data = json.loads(text)
-    except ValueError as exc:
-        return None, f"not JSON: {exc}"
-    if not isinstance(data, dict):
-        return None, f"a JSON object was expected, got {type(data).__name__}"
+    data, reason = parse_json_message(text, dict)
+    if data is None:
+        return None, reason
     slots, filled = data.get("slots"), data.get("filled")
     if not isinstance(slots, list) or not slots or not all(isinstance(name, str) for name in slots):
         return None, "'slots' must be a non-empty list of class names"

@@ -22,7 +22,7 @@ def test_a_tray_message_is_read():
     "text, words",
     [
         ("{", "not JSON"),
-        ("[1]", "JSON object"),
+        ("[1]", "JSON dict"),
         (json.dumps({"slots": [], "filled": []}), "'slots'"),
         (json.dumps({"slots": SLOTS, "filled": ["gear"]}), "'filled'"),
         (json.dumps({"slots": SLOTS, "filled": "nut_yellow"}), "'filled'"),

@@ -107,12 +107,15 @@ def test_bad_skeleton_is_rejected():
         render_skeleton(bad, INTR)
 
 
-@pytest.mark.parametrize("sequence", [31, 34])  # subject 22: grab, expand
-def test_tracker_follows_a_real_hand_within_10_mm(sequence):
+def palm_errors(sequence, frames_used, subject=None):
+    """The tracker's palm minus SHREC's palm joint (m, optical frame) over the first
+    ``frames_used`` frames of a slice sequence, rendered with seeded noise."""
     data = np.load(SLICE)
     offsets = data["offsets"]
-    assert data["subject"][sequence] == 22
-    frames = place_in_view(data["joints"][offsets[sequence] : offsets[sequence + 1]].astype(float), 0.30)[:20]
+    if subject is not None:
+        assert data["subject"][sequence] == subject
+    frames = place_in_view(data["joints"][offsets[sequence] : offsets[sequence + 1]].astype(float), 0.30)
+    frames = frames[:frames_used]
     rng = np.random.default_rng(3)
     tracker = DepthHandTracker({})
     seen = []
@@ -120,7 +123,12 @@ def test_tracker_follows_a_real_hand_within_10_mm(sequence):
         hand = tracker.track(render_skeleton(joints, INTR, rng=rng), INTR)
         assert hand is not None, tracker.last_reason
         seen.append(OPTICAL_TO_BODY.T @ hand.position)
-    error = np.array(seen) - frames[:, PALM]
+    return np.array(seen) - frames[:, PALM]
+
+
+@pytest.mark.parametrize("sequence", [31, 34])  # subject 22: grab, expand
+def test_tracker_follows_a_real_hand_within_10_mm(sequence):
+    error = palm_errors(sequence, 20, subject=22)
     # The palm centre, not the surface: within a few mm of SHREC's palm joint on average.
     assert np.linalg.norm(error.mean(axis=0)) < 0.015, error.mean(axis=0)
     rms = float(np.sqrt(np.mean(np.sum((error - error.mean(axis=0)) ** 2, axis=1))))
@@ -148,16 +156,6 @@ def test_palm_core_holds_the_palm_where_the_widest_part_slides(sequence):
     """Fingers held together make a plate as wide as the palm, and the distance transform's
     maximum slides onto it (16.1 and 13.9 mm RMS over these 30 frames with the core off,
     ``palm_core_width_m: 0``); the centroid of the palm's core stays on the palm."""
-    data = np.load(SLICE)
-    offsets = data["offsets"]
-    frames = place_in_view(data["joints"][offsets[sequence] : offsets[sequence + 1]].astype(float), 0.30)[:30]
-    rng = np.random.default_rng(3)
-    tracker = DepthHandTracker({})
-    seen = []
-    for joints in frames:
-        hand = tracker.track(render_skeleton(joints, INTR, rng=rng), INTR)
-        assert hand is not None, tracker.last_reason
-        seen.append(OPTICAL_TO_BODY.T @ hand.position)
-    error = np.array(seen) - frames[:, PALM]
+    error = palm_errors(sequence, 30)
     rms = float(np.sqrt(np.mean(np.sum((error - error.mean(axis=0)) ** 2, axis=1))))
     assert rms < 0.009, f"{rms * 1000:.1f} mm RMS"
