@@ -224,7 +224,7 @@ def main():
     curves = {}
     total = sum(len(sweep) for _, sweep in SWEEPS.values())
     done = 0
-    held_out = ([n for n in EVALUATION_STILL if n in data], [n for n in EVALUATION_MOVING if n in data])
+    held_out = evaluation_split(data)
     for curve, (name, sweep) in SWEEPS.items():
         curves[curve] = []
         for params in sweep:
@@ -256,7 +256,7 @@ def main():
     results["verdict"] = verdict
     results["shipped_defaults"] = check_defaults(data)
     results["shipped_defaults"]["evaluation_missing"] = missing
-    results["limits"] = limits(data, mean10)
+    results["limits"] = limits(data, results["shipped_defaults"])
     results["limits"]["evaluation_sweeps"] = evaluation_sweeps(curves, results["shipped_defaults"])
     write_results("filter_bench", results, show=False)
     plot(results, os.path.join(RESULTS, "filter_tradeoff.png"))
@@ -280,8 +280,7 @@ def main():
 def check_defaults(data):
     """The shipped defaults (mean-10, one_euro, kalman) on the tuning and the evaluation
     recordings, and their time lag on slow moves."""
-    still = [n for n in EVALUATION_STILL if n in data]
-    moving = [n for n in EVALUATION_MOVING if n in data]
+    still, moving = evaluation_split(data)
     out = {
         "tuning_recordings": {"still": TUNING_STILL, "moving": TUNING_MOVING},
         "evaluation_recordings": {"still": still, "moving": moving},
@@ -358,20 +357,22 @@ def evaluation_sweeps(curves, defaults):
     }
 
 
-def limits(data, mean10, speed_bins=(0.0, 0.02, 0.05, 0.08, 0.12, 0.2, 0.5, np.inf), skip=10):
-    """What the evaluation set allows: the centred floor's ratio to mean-10's lag on each
-    split, and where the default one_euro's evaluation lag lies by the hand's net speed."""
-    splits = {"tuning": (TUNING_STILL, TUNING_MOVING)}
-    splits["evaluation"] = (
-        [n for n in EVALUATION_STILL if n in data],
-        [n for n in EVALUATION_MOVING if n in data],
-    )
+def evaluation_split(data):
+    """(still, moving) evaluation recordings that were found."""
+    return [n for n in EVALUATION_STILL if n in data], [n for n in EVALUATION_MOVING if n in data]
+
+
+def limits(data, defaults, speed_bins=(0.0, 0.02, 0.05, 0.08, 0.12, 0.2, 0.5, np.inf), skip=10):
+    """What the evaluation set allows: the centred smoother's ratio to mean-10's lag on each
+    split (mean-10's figures from ``defaults``, check_defaults' result), and where the
+    default one_euro's evaluation lag lies by the hand's net speed."""
+    splits = {"tuning": (TUNING_STILL, TUNING_MOVING), "evaluation": evaluation_split(data)}
     out = {"speed_bins_m_s": [float(b) for b in speed_bins[:-1]]}
     for split, (still, moving) in splits.items():
-        mean_jitter, mean_lag = evaluate(data, functools.partial(run_default, data, "mean"), still, moving)
-        floor = centred_floor(data, still, moving, mean_jitter)
+        mean = defaults["mean"]
+        floor = centred_floor(data, still, moving, mean[f"{split}_jitter_mm"])
         out[f"{split}_centred_floor_lag_mm"] = round(floor, 3)
-        out[f"{split}_centred_floor_ratio_to_mean10"] = round(floor / mean_lag, 3)
+        out[f"{split}_centred_floor_ratio_to_mean10"] = round(floor / mean[f"{split}_lag_mm"], 3)
     still, moving = splits["evaluation"]
     share = np.zeros(len(speed_bins) - 1)
     for name in moving:

@@ -80,11 +80,9 @@ def stream_lag_s(name: str, driver_params: dict | None = None) -> float:
     key = getattr(factory, "STREAM_LAG_PARAM", None)
     if key is None:
         return 0.0
-    values = driver_params or {}
-    if key in values:
-        return float(values[key])
     schema = getattr(factory, "PARAMETERS", None)
-    return float(schema.params[key].default) if schema is not None and key in schema.params else 0.0
+    values = {**(schema.defaults() if schema is not None else {}), **(driver_params or {})}
+    return float(values.get(key, 0.0))
 
 
 def create_driver(name: str, **params):

@@ -427,7 +427,7 @@ class DepthHandTracker:
         wrist = s_lo + (narrow[0] + 4) * _SECTION_M
         return arm, profiled, (mean, wrist)
 
-    def _palm_core(self, centre, z, filled, dist, front, wrist, arm, xs, ys, intr):
+    def _palm_core(self, centre, z, dist, front, wrist, arm, xs, ys, intr):
         """The seen palm surface's centre as the centroid of the palm's core, or None when
         the core is too small (a palm seen edge-on).
 
@@ -447,7 +447,7 @@ class DepthHandTracker:
         rows, cols = np.nonzero(dist[::2, ::2] >= c["palm_core_width_m"] * intr.fx / deepest)
         rows, cols = rows * 2, cols * 2
         depth = z[rows, cols]
-        keep = (depth > 0) & (depth < deepest) & filled[rows, cols].view(bool)
+        keep = (depth > 0) & (depth < deepest)  # inside the closed blob already: the transform is 0 outside
         rows, cols, depth = rows[keep], cols[keep], depth[keep]
         keep = dist[rows, cols] * depth / intr.fx >= c["palm_core_width_m"]  # pixels to metres at their depth
         pts = np.column_stack((xs[cols[keep]] * depth[keep], ys[rows[keep]] * depth[keep], depth[keep]))
@@ -526,7 +526,7 @@ class DepthHandTracker:
         centre = np.array([(u - intr.cx) / intr.fx * zc, (v - intr.cy) / intr.fy * zc, zc])
         core = None
         if c["palm_core_width_m"] > 0 and wrist is not None and arm is not None:
-            core = self._palm_core(centre, z, filled, dist, front, wrist, arm, xs[l0:l1], ys[t0:t1], intr)
+            core = self._palm_core(centre, z, dist, front, wrist, arm, xs[l0:l1], ys[t0:t1], intr)
         if arm is not None:
             # Without a clear forearm in the first frame, the palm found says which end
             # holds the fingers.
