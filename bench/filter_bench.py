@@ -42,7 +42,7 @@ sys.path.insert(0, os.path.join(ROOT, "src", "motion_sensor"))
 
 from bench_common import RESULTS, write_results  # noqa: E402
 from motion_sensor.devices.leap_v6 import read_recording, select_primary  # noqa: E402
-from motion_sensor.sequencing.filters import make_filter  # noqa: E402
+from motion_sensor.sequencing.filters import FILTER_PARAMS, make_filter  # noqa: E402
 
 TUNING_STILL = ["Waiting-110fps", "waiting-short"]
 TUNING_MOVING = ["wave", "flapping", "test-paddle-rightwards", "rollAndPitchCropped"]
@@ -50,6 +50,7 @@ EVALUATION_STILL = ["HandSplay-110fps"]
 EVALUATION_MOVING = ["brian", "grab", "gun", "three-claps", "rollAndPitchWithEntry", "confidence-demo", "pinch"]
 SHARED = os.path.join(ROOT, "..", "shared", "data", "leap_v6")
 SLOW_SPEEDS = (0.02, 0.05, 0.1, 0.2, 0.5)  # m/s, ramps added to a still-hand recording
+DRIFT_WINDOWS = (0.3, 0.4, 0.5, 0.6, 0.7)  # s, one_euro's drift_window swept
 # Curve name -> (filter name, parameter sets). "one_euro" and "kalman" are the shipped
 # filters; "one_euro_classic" and "kalman_cv" are the textbook versions they extend.
 SWEEPS = {
@@ -57,7 +58,7 @@ SWEEPS = {
     "one_euro_classic": (
         "one_euro",
         [
-            {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": 0.0, "speed_window": 0.0}
+            {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": 0.0, "speed_window": 0.0, "drift_window": 0.0}
             for m in (0.3, 1.0, 3.0)
             for b in (10.0, 20.0, 40.0, 80.0, 160.0, 320.0)
             for d in (0.3, 1.0, 3.0)
@@ -66,7 +67,7 @@ SWEEPS = {
     "one_euro": (
         "one_euro",
         [
-            {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": v, "speed_window": 0.0}
+            {"mincutoff": m, "beta": b, "dcutoff": d, "speed_threshold": v, "speed_window": 0.0, "drift_window": 0.0}
             for m in (0.3, 0.5, 1.0, 2.0, 3.0, 5.0)
             for b in (320.0, 640.0, 1280.0)
             for d in (1.0, 2.0, 4.0)
@@ -76,20 +77,36 @@ SWEEPS = {
     "one_euro+deadband": (
         "one_euro",
         [
-            {"mincutoff": m, "deadband": db, "speed_window": 0.0}
+            {"mincutoff": m, "deadband": db, "speed_window": 0.0, "drift_window": 0.0}
             for m in (1.0, 3.0)
             for db in (0.0002, 0.0005, 0.001, 0.002)
         ],
     ),
-    # The shipped one_euro: speed as the net move over 0.2 s.
+    # Speed as the net move over 0.2 s (the shipped one_euro without its drift gate).
     "one_euro_window": (
         "one_euro",
         [
-            {"mincutoff": m, "beta": b, "speed_threshold": v, "speed_window": 0.2, "lag_compensation": c}
+            {
+                "mincutoff": m,
+                "beta": b,
+                "speed_threshold": v,
+                "speed_window": 0.2,
+                "lag_compensation": c,
+                "drift_window": 0.0,
+            }
             for m in (2.0, 3.0, 4.0)
             for b in (640.0, 1280.0)
             for v in (0.06, 0.08, 0.1)
             for c in (0.0, 0.3)
+        ],
+    ),
+    # The shipped one_euro plus the drift gate: a slow move's net speed over a longer window.
+    "one_euro_drift": (
+        "one_euro",
+        [
+            {"drift_window": w, "drift_threshold": v}
+            for w in DRIFT_WINDOWS
+            for v in (0.035, 0.04, 0.045, 0.05, 0.055, 0.06, 0.065, 0.07)
         ],
     ),
     "kalman_cv": (
@@ -241,7 +258,15 @@ def main():
     mean10 = next(c for c in curves["mean"] if c["params"]["queue_size"] == 10)
     results["mean10"] = mean10
     verdict = {}
-    for curve in ("one_euro_classic", "one_euro", "one_euro+deadband", "one_euro_window", "kalman_cv", "kalman"):
+    for curve in (
+        "one_euro_classic",
+        "one_euro",
+        "one_euro+deadband",
+        "one_euro_window",
+        "one_euro_drift",
+        "kalman_cv",
+        "kalman",
+    ):
         at_mean10 = lag_at_jitter(curves[curve], mean10["jitter_mm"])
         at_leap = lag_at_jitter(curves[curve], results["leap_stabilized"]["jitter_mm"])
         verdict[curve] = {
@@ -254,6 +279,7 @@ def main():
         }
     results["curves"] = curves
     results["verdict"] = verdict
+    results["drift_choice"] = choose_drift(data, curves["one_euro_drift"])
     results["shipped_defaults"] = check_defaults(data)
     results["shipped_defaults"]["evaluation_missing"] = missing
     results["limits"] = limits(data, results["shipped_defaults"])
@@ -311,6 +337,38 @@ def check_defaults(data):
             out[label]["evaluation_steadier_than_mean10"] and out[label]["evaluation_lag_ratio_to_mean10"] <= 1 / 3
         )
     return out
+
+
+def trailing_net_speeds(stamps, positions, window):
+    """Net displacement over the last ``window`` s divided by its time (m/s), as one_euro's
+    drift gate measures it: only at frames with a whole window of history."""
+    start = np.searchsorted(stamps, stamps - window, side="right") - 1
+    whole = start >= 0
+    start = np.maximum(start, 0)
+    span = np.maximum(stamps - stamps[start], 1e-9)
+    return (np.linalg.norm(positions - positions[start], axis=1) / span)[whole]
+
+
+def choose_drift(data, curve):
+    """one_euro's drift gate as chosen on the tuning recordings: among the swept settings
+    whose threshold lies above the largest net speed the tuning still hands reach over its
+    window (the gate never opens on them, so they are filtered as without it), the least
+    tuning lag. The evaluation set is never looked at."""
+    reach = {
+        str(w): round(max(float(trailing_net_speeds(data[n][0], data[n][1], w).max()) for n in TUNING_STILL), 4)
+        for w in DRIFT_WINDOWS
+    }
+    shut = [p for p in curve if p["params"]["drift_threshold"] > reach[str(p["params"]["drift_window"])]]
+    chosen = min(shut, key=lambda p: p["lag_mm"])
+    schema = FILTER_PARAMS.params["one_euro"].schema.defaults()
+    shipped = {k: schema[k] for k in ("drift_window", "drift_threshold")}
+    return {
+        "rule": "least tuning lag among thresholds above the tuning still hands' largest net speed over the window",
+        "still_hands_largest_net_speed_m_s": reach,
+        "chosen": chosen,
+        "shipped": shipped,
+        "shipped_is_chosen": shipped == chosen["params"],
+    }
 
 
 def net_speeds(stamps, positions, window=0.2):
@@ -403,6 +461,7 @@ def plot(results, path):
         "one_euro": ("s-", "tab:orange"),
         "one_euro+deadband": ("D:", "tab:red"),
         "one_euro_window": ("v-", "tab:purple"),
+        "one_euro_drift": ("P-", "tab:brown"),
         "kalman_cv": ("^--", "tab:green"),
         "kalman": ("^-", "tab:green"),
     }

@@ -183,8 +183,8 @@ def test_a_windowed_speed_tells_a_slow_move_from_tremor_sooner(rng):
     # 0.1 m/s is a slow deliberate move; the classic speed (consecutive inputs smoothed at
     # dcutoff = 1 Hz) still reads it below the 0.08 m/s threshold a while after it starts.
     stamps, positions, truth, moving = synthetic_hand(rng, speed=0.1)
-    classic = run(OneEuroFilter(speed_window=0.0), stamps, positions)
-    windowed = run(OneEuroFilter(speed_window=0.2), stamps, positions)
+    classic = run(OneEuroFilter(speed_window=0.0, drift_window=0.0), stamps, positions)
+    windowed = run(OneEuroFilter(speed_window=0.2, drift_window=0.0), stamps, positions)
     t = stamps - stamps[0]
     onset = moving & (t < 2.5)  # the first half second of the move
 
@@ -212,7 +212,46 @@ def test_lag_compensation_adds_back_the_low_pass_lag_and_never_more_than_max_lea
     assert out[0] <= ramp[50, 0] + 0.5 + 0.002 + 1e-9
 
 
+def test_the_drift_gate_follows_a_slow_steady_move_the_speed_gate_misses(rng):
+    # 0.072 m/s: below the 0.08 m/s speed gate, above the drift gate's 0.065 m/s over 0.3 s.
+    stamps, positions, truth, moving = synthetic_hand(rng, speed=0.072)
+    gated = run(OneEuroFilter(), stamps, positions)
+    ungated = run(OneEuroFilter(drift_window=0.0), stamps, positions)
+    assert moving_lag(gated, truth, moving, stamps) < 0.6 * moving_lag(ungated, truth, moving, stamps), (
+        moving_lag(gated, truth, moving, stamps),
+        moving_lag(ungated, truth, moving, stamps),
+    )
+
+
+def test_the_drift_gate_leaves_a_still_hand_and_a_hand_wandering_back_and_forth_as_they_were(rng):
+    # A still trembling hand from its first frame (a window only partly filled would read its
+    # noise as speed), then a palm wandering 8 mm back and forth at 1.6 Hz (a hand opening and
+    # closing): up to 0.067 m/s net over 0.2 s, 0.053 over 0.3 s.
+    stamps, positions, _, moving = synthetic_hand(rng)
+    t = stamps - stamps[0]
+    wander = positions[~moving] + np.outer(0.008 * np.sin(2 * np.pi * 1.6 * t[~moving]), [1.0, 0.0, 0.0])
+    for hand in (positions[~moving], wander):
+        gated = run(OneEuroFilter(), stamps[~moving], hand)
+        ungated = run(OneEuroFilter(drift_window=0.0), stamps[~moving], hand)
+        np.testing.assert_array_equal(gated, ungated)
+
+
+def test_the_drift_gate_opens_only_on_a_whole_window():
+    f = OneEuroFilter(drift_window=0.3, drift_threshold=0.0)
+    stamps = 100.0 + np.arange(0.0, 0.5, 1.0 / RATE)
+    speeds = [f._drift_speed(t, np.array([0.05 * (t - 100.0), 0.0, 0.0])) for t in stamps]
+    whole = stamps - stamps[0] >= 0.3
+    assert not any(speeds[i] for i in np.flatnonzero(~whole))
+    assert np.allclose(np.array(speeds)[whole], 0.05)
+
+
 def test_the_new_one_euro_parameters_are_checked():
-    for params in ({"speed_window": -0.1}, {"lag_compensation": 1.5}, {"max_lead": -1.0}):
+    for params in (
+        {"speed_window": -0.1},
+        {"lag_compensation": 1.5},
+        {"max_lead": -1.0},
+        {"drift_window": -0.3},
+        {"drift_threshold": -0.01},
+    ):
         with pytest.raises(MotionSensorError):
             OneEuroFilter(**params)

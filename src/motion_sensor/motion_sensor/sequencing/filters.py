@@ -172,6 +172,15 @@ class OneEuroFilter:
     the low-pass's own lag on a steady move (the speed times the time constant
     1 / (2 pi cutoff)), never more than ``max_lead`` (m); the lead lives only on each frame's
     output, so a hand that is lost is never extrapolated.
+
+    ``drift_window`` (s, 0 = off) and ``drift_threshold`` (m/s) open the cutoff on a slow
+    move that the speed gate misses: the net move over the longer window, once the hand has
+    been seen that long, also opens it above its own threshold (``cutoff = mincutoff + beta
+    * max(0, speed - speed_threshold, drift - drift_threshold)``). Why: a still hand's palm
+    wanders back and forth at up to the gate's speed over 0.2 s (a hand opening and closing
+    moves it so), but over 0.4 s it nets less, while a slow deliberate move keeps its speed
+    over any window. The threshold lies above what the still recordings net over that window
+    (bench/filter_bench.py), so a still hand is filtered as without it.
     """
 
     # Defaults from bench/filter_bench.py on the real recordings: steadier than mean-10
@@ -188,6 +197,8 @@ class OneEuroFilter:
         speed_window: float = 0.2,
         lag_compensation: float = 0.0,
         max_lead: float = 0.005,
+        drift_window: float = 0.3,
+        drift_threshold: float = 0.065,
     ):
         for name, value in (("mincutoff", mincutoff), ("dcutoff", dcutoff)):
             if not value > 0:
@@ -199,6 +210,8 @@ class OneEuroFilter:
             ("speed_threshold", speed_threshold),
             ("speed_window", speed_window),
             ("max_lead", max_lead),
+            ("drift_window", drift_window),
+            ("drift_threshold", drift_threshold),
         ):
             if not value >= 0:
                 raise MotionSensorError(f"one_euro {name} must be >= 0, got {value!r}")
@@ -210,6 +223,8 @@ class OneEuroFilter:
         self.speed_window = float(speed_window)
         self.lag_compensation = float(lag_compensation)
         self.max_lead = float(max_lead)
+        self.drift_window = float(drift_window)
+        self.drift_threshold = float(drift_threshold)
         self.reset()
 
     def reset(self) -> None:
@@ -224,6 +239,7 @@ class OneEuroFilter:
         # (stamp, position) of the inputs within speed_window; bounded by time and by count
         # (a 1 kHz device over the longest sensible window).
         self._recent = deque(maxlen=1024)
+        self._drift = deque(maxlen=4096)  # the same over drift_window
         self._lead = np.zeros(3)
 
     def _window_velocity(self, stamp: float, position: np.ndarray) -> np.ndarray:
@@ -235,6 +251,18 @@ class OneEuroFilter:
             recent.popleft()
         start, origin = recent[0]
         return (position - origin) / (stamp - start) if stamp > start else np.zeros(3)
+
+    def _drift_speed(self, stamp: float, position: np.ndarray) -> float:
+        """Net move over the last ``drift_window`` s divided by its time; 0 until the hand
+        has been seen for the whole window (a short span would read noise as speed)."""
+        recent = self._drift
+        recent.append((stamp, position))
+        while len(recent) > 2 and stamp - recent[1][0] >= self.drift_window:
+            recent.popleft()
+        start, origin = recent[0]
+        if stamp - start < self.drift_window:
+            return 0.0
+        return float(np.linalg.norm(position - origin)) / (stamp - start)
 
     def _hysteresis(self) -> np.ndarray:
         if self.deadband == 0.0 or self._output is None:
@@ -255,6 +283,8 @@ class OneEuroFilter:
             self._last_input = position.copy()
             if self.speed_window > 0.0:
                 self._recent.append((stamp, position.copy()))
+            if self.drift_window > 0.0:
+                self._drift.append((stamp, position.copy()))
             return self._hysteresis(), self._orientation.copy()
         dt = stamp - self._stamp
         if dt <= 0:
@@ -270,7 +300,10 @@ class OneEuroFilter:
         self._velocity = a_d * raw_velocity + (1 - a_d) * self._velocity
         velocity = self._window_velocity(stamp, position.copy()) if self.speed_window > 0.0 else self._velocity
         speed = float(np.linalg.norm(velocity))
-        cutoff = self.mincutoff + self.beta * max(0.0, speed - self.speed_threshold)
+        excess = speed - self.speed_threshold
+        if self.drift_window > 0.0:
+            excess = max(excess, self._drift_speed(stamp, position.copy()) - self.drift_threshold)
+        cutoff = self.mincutoff + self.beta * max(0.0, excess)
         a = _smoothing_factor(dt, cutoff)
         self._position = a * position + (1 - a) * self._position
         if self.lag_compensation > 0.0:
@@ -498,6 +531,21 @@ FILTER_PARAMS = ParamSchema(
                         doc="part of the low-pass's lag on a steady move added back (speed x time constant)",
                     ),
                     Param("max_lead", 0.005, unit="m", low=0, doc="largest lag compensation"),
+                    Param(
+                        "drift_window",
+                        0.3,
+                        unit="s",
+                        low=0,
+                        high=2.0,
+                        doc="a slow move as the net move over this longer window also opens the cutoff (0: off)",
+                    ),
+                    Param(
+                        "drift_threshold",
+                        0.065,
+                        unit="m/s",
+                        low=0,
+                        doc="net speed over drift_window above which the cutoff opens",
+                    ),
                 ]
             ),
         ),
