@@ -15,11 +15,19 @@ from .errors import HwInterfaceError
 from .protocol import Result
 from .robot_hw import DriverStatus, RobotDriver, SimulatedScene, UrdfModelMixin
 from .stream_follower import STREAM_ACCELERATION_PARAM, StreamFollower
+from .timed_targets import TimedTargets
 from .trajectory import JointPath, joint_move_duration, trapezoid_duration
 
 # Fraction of the URDF velocity limits the simulated motors are capped at (see login()): the
 # simulated arm's top joint speed. MoveJ/MoveL plan at speed_scale (0.5) of the limits, below it.
 MOTOR_SPEED_FRACTION = 0.94
+
+# How far (s) the physics thread may fall behind its schedule and still run every step it
+# owes (each with the streamed target in force at its scheduled time, TimedTargets); further
+# behind it drops the time (counted in ``overruns``) instead of racing. At 0.2 s a burst is
+# ~100 steps of ~0.15 ms; the 20 ms this was before dropped time 0-2 times in a 25 s replay
+# with one core of two kept busy, and the replay's arm then skipped 25 ms of its path (4.75 mm).
+CATCH_UP_S = 0.2
 
 
 def load_scene(client, spec) -> dict:
@@ -200,8 +208,10 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._follower = StreamFollower(
             self.kinematics.velocity_limits * MOTOR_SPEED_FRACTION, self._initial, self.stream_acceleration
         )
-        # Simulated time of the last SET_JOINTS (None: no stream): the stream watchdog.
+        # Simulated time of the last SET_JOINTS applied (None: no stream): the stream watchdog.
         self._last_stream: float | None = None
+        # SET_JOINTS targets by wall-clock arrival, applied by the step scheduled after it.
+        self._timed_targets = TimedTargets()
         self.stream_timeouts = 0
         # Wall-clock time (s) of the state after the last physics step, see joint_sample().
         self._step_stamp = time.time()
@@ -346,8 +356,11 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             self._require_connection()
             if self._path is not None:
                 raise HwInterfaceError("a MoveJ/MoveL is running; STOP it before streaming", Result.BUSY)
-            self._follower.set_goal(target)
-            self._last_stream = self._sim_time
+            if self.real_time:
+                self._timed_targets.add(time.time(), target)
+            else:
+                self._follower.set_goal(target)
+                self._last_stream = self._sim_time
 
     def move_j(self, joints, timeout: float = 30.0) -> None:
         goal = np.asarray(joints, dtype=float)
@@ -383,6 +396,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             states = self._client.getJointStates(self._body, self._joint_indices)
             self._target = np.array([s[0] for s in states])
             self._follower.reset(self._target)
+            self._timed_targets.clear()  # no target sent before the STOP is applied after it
             if self._path is not None:
                 self._end_path(
                     (Result.INTERRUPTED, f"motion interrupted by {reason}; the robot stopped short of the goal")
@@ -392,6 +406,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         """Finish the running path with ``outcome`` (None: arrived); caller holds the lock."""
         self._path = None
         self._follower.reset(self._target)  # a stream after the move starts where it ended
+        self._timed_targets.clear()
         self._path_outcome = outcome
         self._path_done.set()
 
@@ -482,6 +497,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             self._step_cache = {}
             self._target = self._initial.copy()
             self._follower.reset(self._target)
+            self._timed_targets.clear()
 
     # -- internals -------------------------------------------------------------------------
     def _current_command(self) -> np.ndarray:
@@ -491,6 +507,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 raise HwInterfaceError("another MoveJ/MoveL is running; wait or STOP it", Result.BUSY)
             # A move starts where the servo is, and the stream it cuts off ends there.
             self._follower.reset(self._target)
+            self._timed_targets.clear()
             return self._target.copy()
 
     def _goal_error(self) -> float:
@@ -522,6 +539,12 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 if self._client is None:
                     break
                 if self._path is None:
+                    # The step scheduled at next_tick (wall clock) applies the newest target
+                    # that had arrived by then, however late the thread runs it.
+                    goal = self._timed_targets.due(next_tick + to_wall)
+                    if goal is not None:
+                        self._follower.set_goal(goal)
+                        self._last_stream = self._sim_time
                     if self._last_stream is not None and self._sim_time - self._last_stream > self.stream_timeout:
                         # The stream stopped (a client died, the network was cut): brake to rest.
                         self._follower.brake()
@@ -586,7 +609,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             delay = next_tick - time.perf_counter()
             if delay > 0:
                 time.sleep(delay)
-            elif delay < -10 * self.time_step:
+            elif delay < -CATCH_UP_S:
                 # Far behind (machine busy): count it and resynchronise instead of racing.
                 self.overruns += 1
                 next_tick = time.perf_counter()
