@@ -39,6 +39,13 @@ measured joint velocities as its tangents, ahead by that lag (estimated from the
 the actions against the states, ``recorded_lag``) plus ``lead_s``: an arm that trails its
 stream as the recorded one did is then at each frame's recorded joints at the frame's
 moment, whatever the commands did in between.
+
+The lag that matters is the REPLAYING arm's behind its stream, not the recorded one's: with
+``stream_lag`` (a ``StreamLag`` fed by the caller with the arm's stamped joint samples) the
+stream starts ahead by the recorded lag plus ``lead_s`` and moves, by at most
+``LEAD_CHANGE_S`` a step, to the lag the arm is measured to trail it by. The recorded lags
+of the demo's episodes differ by 2 ms (the recording machine's load), and the one 2 ms
+below the replaying arm's put the tool 1-1.5 mm behind at every fast frame.
 """
 
 import time
@@ -46,7 +53,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["EpisodeReplay", "ReplayReport"]
+__all__ = ["EpisodeReplay", "ReplayReport", "LEAD_CHANGE_S"]
+
+#: The most the stream's lead moves toward a measured lag in one step (s): 0.1 ms a 10 ms
+#: step, the targets' time running 1 % fast or slow while it moves (2 mm of lead in 0.2 s).
+LEAD_CHANGE_S = 0.0001
 
 
 @dataclass
@@ -59,7 +70,9 @@ class ReplayReport:
     worst_frame: int = -1
     late_ms: dict = field(default_factory=dict)  # frame -> how late its targets went out (ms)
     errors_by_frame: dict = field(default_factory=dict)  # frame -> tool error (mm)
-    lead_ms: float = 0.0  # how far ahead of the frames the stream ran (ms)
+    lead_ms: float = 0.0  # how far ahead of the frames the stream ran at the end (ms)
+    lead_ms_start: float = 0.0  # ... at the start (the recorded lag plus lead_s)
+    lag_measured: bool = False  # the lead came from the replaying arm's measured lag
 
     def add(self, frame: int, error_mm: float) -> None:
         if not self.tool_error_mm or error_mm > max(self.tool_error_mm):
@@ -87,6 +100,8 @@ class ReplayReport:
             "worst_frames": self.worst(),
             "late_ms_max": round(max(self.late_ms.values()), 1) if self.late_ms else 0.0,
             "stream_lead_ms": round(self.lead_ms, 2),
+            "stream_lead_ms_start": round(self.lead_ms_start, 2),
+            "lag_measured": self.lag_measured,
         }
 
 
@@ -157,13 +172,16 @@ class EpisodeReplay:
         tool_at=None,
         velocities=None,
         through_states: bool = False,
+        stream_lag=None,
     ) -> ReplayReport:
         """``states`` and ``actions``: joints then gripper per frame; ``tool_poses``: x y z
         qx qy qz qw per frame, as recorded; ``tool_at``: see the module's docstring;
         ``velocities``: joint velocities per frame (rad/s), the curve's tangents at the
         frames (None: Catmull-Rom's); ``through_states``: the curve goes through the
         recorded joints, ahead by the recorded lag (see the module's docstring), and
-        ``velocities`` are the measured ones."""
+        ``velocities`` are the measured ones; ``stream_lag``: a ``StreamLag`` the caller
+        feeds with the arm's joint samples; the replay tells it each target it sends, and
+        (through the states) runs the stream ahead by the lag it measures."""
         if not (len(states) == len(actions) == len(tool_poses)) or len(states) == 0:
             raise ValueError(
                 f"episode arrays differ in length or are empty: {len(states)}, {len(actions)}, {len(tool_poses)}"
@@ -184,7 +202,10 @@ class EpisodeReplay:
             if tangents.shape != joints.shape:
                 raise ValueError(f"velocities of shape {np.shape(velocities)} for {joints.shape} joint targets")
         lead_s = self.lead_s + (self.recorded_lag(states, actions, velocities) if through_states else 0.0)
-        report.lead_ms = 1000.0 * lead_s
+        report.lead_ms = report.lead_ms_start = 1000.0 * lead_s
+        follow_lag = stream_lag is not None and through_states
+        if follow_lag:
+            stream_lag.start_s = lead_s
         pending = []  # (frame, moment its targets were sent) not measured yet (tool_at)
         steps = (len(actions) - 1) * self.substeps  # the stream's last step: the last frame's targets
         step_s = self.period / self.substeps
@@ -192,6 +213,9 @@ class EpisodeReplay:
         reached = 0  # the next frame whose gripper is still to be set
         start = self.clock()
         for step in range(steps + 1):
+            if follow_lag:  # toward the replaying arm's measured lag, a little a step
+                lead_s += min(max(stream_lag.lag_s() - lead_s, -LEAD_CHANGE_S), LEAD_CHANGE_S)
+                lead = round(lead_s / step_s, 9)
             i, k = divmod(step, self.substeps)
             if k == 0:  # frame i's moment: its tool is measured
                 self._wait_until(start + i * self.period)
@@ -210,18 +234,23 @@ class EpisodeReplay:
             target = self._curve(joints, tangents, frame, part) if part else joints[frame]
             if step + lead > steps:  # past the last frame: on along its tangent for the lead's last steps
                 target = joints[-1] + tangents[-1] * ((step + lead - steps) / self.substeps)
+            sent_at = self.clock()
             try:
                 self.client.set_joints([float(v) for v in target])
             except Exception as exc:  # noqa: BLE001 - the server's refusal ends the replay, reported
                 report.refused += 1
                 report.reason = f"frame {i}: {exc}"
                 return report
+            if stream_lag is not None:
+                stream_lag.sent(sent_at, target)
             while reached <= frame:  # each frame the stream has reached: its gripper too
                 closed = bool(actions[reached, dof] > 0.5)
                 reached += 1
                 if closed != gripper:
                     self.client.set_gripper(closed)
                     gripper = closed
+        report.lead_ms = 1000.0 * lead_s
+        report.lag_measured = bool(follow_lag and stream_lag.measuring)
         deadline = self.clock() + 1.0  # the last moments' tool poses are still on their way
         while pending and self.clock() < deadline:
             self.sleep(0.02)

@@ -218,6 +218,11 @@ REPLAY_EPISODE = NodeInterface(
             _POSE,
             "the measured tool, stamped: the tool at the moment each frame's targets are sent",
         ),
+        Topic(
+            "joint_states",
+            "sensor_msgs/JointState",
+            "the measured joints, stamped: how long the arm trails the stream (--lag live)",
+        ),
     ),
     calls=(_SERVER,),
 )

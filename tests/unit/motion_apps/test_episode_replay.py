@@ -15,6 +15,7 @@ from motion_apps.episode_report import (
     summarize_dataset,
     velocity_agreement,
 )
+from motion_apps.stream_lag import StreamLag
 
 
 class _Arm:
@@ -303,3 +304,68 @@ def test_replay_through_the_recorded_joints_needs_their_velocities():
     states, actions, _, tools = _wiggling_episode(0.01)
     with pytest.raises(ValueError, match="measured velocities"):
         _replay(_Arm()).run(states, actions, tools, through_states=True)
+
+
+def _live_lag_replay(arm_lag, recorded_lag, live) -> dict:
+    """An episode recorded on an arm ``recorded_lag`` s behind its commands, replayed
+    through its states on an arm ``arm_lag`` s behind its stream whose joints are sampled
+    at 100 Hz (``live``: fed to a StreamLag, as the node does from joint_states)."""
+    n = 30
+    t = np.arange(n) / 10.0
+
+    def command(t):  # 0.5 m/s with a 5 Hz wiggle: the demo's save circle's speeds
+        return 0.5 * t + 0.01 * np.sin(2 * np.pi * 5.0 * t)
+
+    def rate(t):
+        return 0.5 + 0.01 * 2 * np.pi * 5.0 * np.cos(2 * np.pi * 5.0 * t)
+
+    def xyz(x):
+        return np.stack([x, np.zeros_like(x), np.full_like(x, 0.5)], axis=1)
+
+    states = np.hstack([xyz(command(t - recorded_lag)), np.zeros((n, 1))])
+    actions = np.hstack([xyz(command(t)), np.zeros((n, 1))])
+    velocities = np.hstack([rate(t - recorded_lag)[:, None], np.zeros((n, 2))])
+    tools = np.hstack([states[:, :3], np.tile([0, 0, 0, 1], (n, 1))])
+    now, sent = [0.0], []
+    arm = _Arm()
+    arm.set_joints = lambda joints: sent.append((now[0], np.array(joints)))
+
+    def arm_at(moment):  # the targets' path, arm_lag late (linear between the targets)
+        moment -= arm_lag
+        k = max([i for i, (stamp, _) in enumerate(sent) if stamp <= moment], default=0)
+        (t0, p0), (t1, p1) = sent[k], sent[min(k + 1, len(sent) - 1)]
+        return p0 + (p1 - p0) * ((moment - t0) / (t1 - t0) if t1 > t0 else 0.0)
+
+    stream_lag = StreamLag(0.0) if live else None
+    sampled = [0.0035]  # the next joint sample's moment, off the stream's phase
+
+    def sleep(seconds):
+        now[0] += seconds
+        while stream_lag is not None and sent and sampled[0] <= now[0]:
+            stream_lag.measured(sampled[0], arm_at(sampled[0]))
+            sampled[0] += 0.01
+
+    def tool_at(moment):
+        return arm_at(moment) if sent and sent[-1][0] >= moment else None
+
+    run = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=lambda: now[0], sleep=sleep, settle_s=0.0)
+    report = run.run(
+        states, actions, tools, tool_at=tool_at, velocities=velocities, through_states=True, stream_lag=stream_lag
+    )
+    after = [error for frame, error in report.errors_by_frame.items() if frame >= 10]
+    return dict(report.summary(), max_after_1s=max(after))
+
+
+def test_replay_runs_ahead_by_the_replaying_arms_measured_lag_not_the_recorded_one():
+    """The demo's episode 0 was recorded with its arm 10.5 ms behind its commands, and the
+    replaying arm trailed its stream by 12.5 ms: ahead by the recorded lag, the tool was
+    2 ms of its motion behind at every fast frame (1-1.5 mm at 0.5-0.6 m/s). Measured from
+    the arm's joint samples, the lead becomes the replaying arm's lag within the episode's
+    first second."""
+    recorded = _live_lag_replay(0.0125, 0.0105, live=False)
+    live = _live_lag_replay(0.0125, 0.0105, live=True)
+    assert recorded["stream_lead_ms"] == pytest.approx(10.5, abs=0.3) and not recorded["lag_measured"]
+    assert live["stream_lead_ms_start"] == pytest.approx(10.5, abs=0.3)
+    assert live["lag_measured"] and live["stream_lead_ms"] == pytest.approx(12.5, abs=0.2)
+    assert recorded["tool_error_mm_p50"] > 0.4 and recorded["max_after_1s"] > 1.0
+    assert live["tool_error_mm_p50"] < 0.1 and live["max_after_1s"] < 0.1

@@ -1,0 +1,92 @@
+"""How long an arm trails the stream of joint targets it is being sent, measured while the
+stream runs from the arm's own stamped joint samples (plain Python: the replay feeds it
+what it sends, the replay node what the server publishes; tests feed it directly).
+
+A replay of the recorded joint path must run ahead by the lag of the arm that REPLAYS it:
+the recorded episode's own lag (its actions against its states) is the recording
+machine's, and it moved with that machine's load (10.5 ms for one episode of the demo,
+12.1-12.4 for the two others, all recorded on the same simulation), while the replaying
+arm trailed its stream by 12.0-12.5 ms (11.5 at under 0.8 rad/s, 13.0 above 1.2) on a
+loaded machine. Two milliseconds short at the save circle's 0.5-0.6 m/s put the tool
+1-1.5 mm behind at every fast frame and over 2 mm with the timing's jitter on top.
+
+Estimate: with the targets sent, linear between their send moments, and each measured
+sample's joints and velocity (from the sample before), ``target - joints = velocity *
+lag`` in the least-squares sense over the last ``window`` moving samples (those with a
+joint faster than ``min_speed``): the same estimate as the recorded lag, on the live arm.
+"""
+
+import threading
+from collections import deque
+
+import numpy as np
+
+from .stamped_history import StampedHistory
+
+__all__ = ["StreamLag"]
+
+
+class StreamLag:
+    """``start_s``: the lag assumed until enough motion was measured (``min_power``: the
+    sum of squared joint speeds, (rad/s)^2, over the samples used); at most ``most_s``.
+    ``sent`` and ``measured`` take moments on one clock; safe to call from two threads."""
+
+    def __init__(
+        self,
+        start_s: float,
+        window: int = 200,
+        min_speed: float = 0.3,
+        min_power: float = 5.0,
+        most_s: float = 0.1,
+    ):
+        self.start_s = float(start_s)
+        self.min_speed = float(min_speed)
+        self.min_power = float(min_power)
+        self.most_s = float(most_s)
+        self._sent = StampedHistory(maxlen=400)  # 4 s at the replay's 100 Hz
+        self._terms = deque(maxlen=window)  # (behind . velocity, velocity . velocity) per moving sample
+        self._previous = None  # (moment, joints) of the last measured sample
+        self._lock = threading.Lock()
+
+    def sent(self, moment: float, target) -> None:
+        """A target the stream sent at ``moment``."""
+        with self._lock:
+            self._sent.add(moment, np.asarray(target, dtype=np.float64))
+
+    def measured(self, moment: float, joints) -> None:
+        """The arm's joints measured at ``moment`` (the state's own stamp)."""
+        joints = np.asarray(joints, dtype=np.float64)
+        with self._lock:
+            previous, self._previous = self._previous, (float(moment), joints)
+            if previous is None or moment <= previous[0] or previous[1].shape != joints.shape:
+                return
+            span = moment - previous[0]
+            velocity = (joints - previous[1]) / span
+            if float(np.max(np.abs(velocity))) < self.min_speed:
+                return
+            middle = previous[0] + 0.5 * span  # the velocity is the one between the two samples
+            found = self._sent.around(middle)
+            if found is None or found[1][0] <= middle or found[0][0] > middle:
+                return  # no target sent on both sides of the sample: not in the stream
+            (_, before), (_, after), u = found
+            if before.shape != joints.shape:
+                return
+            behind = before + (after - before) * u - 0.5 * (joints + previous[1])
+            self._terms.append((float(np.dot(behind, velocity)), float(np.dot(velocity, velocity))))
+
+    def lag_s(self) -> float:
+        """The measured lag (s), or ``start_s`` while too little motion was measured."""
+        with self._lock:
+            if not self._terms:
+                return self.start_s
+            along, power = np.sum(np.asarray(self._terms), axis=0)
+        if power < self.min_power:
+            return self.start_s
+        return min(max(float(along) / float(power), 0.0), self.most_s)
+
+    @property
+    def measuring(self) -> bool:
+        """True once the lag comes from the arm (enough motion measured)."""
+        with self._lock:
+            power = sum(term[1] for term in self._terms)
+        return power >= self.min_power
