@@ -178,14 +178,14 @@ class OneEuroFilter:
     been seen that long, also opens it above its own threshold (``cutoff = mincutoff + beta
     * max(0, speed - speed_threshold, drift - drift_threshold)``). Why: a still hand's palm
     wanders back and forth at up to the gate's speed over 0.2 s (a hand opening and closing
-    moves it so), but over 0.4 s it nets less, while a slow deliberate move keeps its speed
-    over any window. The threshold lies above what the still recordings net over that window
+    moves it so), but over a longer window it nets less, while a slow deliberate move keeps
+    its speed over any window. The threshold lies above what the still recordings net over that window
     (bench/filter_bench.py), so a still hand is filtered as without it.
     """
 
     # Defaults from bench/filter_bench.py on the real recordings: steadier than mean-10
-    # with about a quarter of its lag on the tuning recordings, and steadier with about
-    # half its lag on held-out ones (figures in bench/results/filter_bench.json).
+    # with a tenth of its lag on the tuning recordings, and steadier with a third of it on
+    # held-out ones (figures in bench/results/filter_bench.json).
     def __init__(
         self,
         mincutoff: float = 3.0,
