@@ -210,7 +210,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         )
         # Simulated time of the last SET_JOINTS applied (None: no stream): the stream watchdog.
         self._last_stream: float | None = None
-        # SET_JOINTS targets by wall-clock arrival, applied by the step scheduled after it.
+        # SET_JOINTS targets by arrival (perf_counter), applied by the step scheduled after it.
         self._timed_targets = TimedTargets()
         self.stream_timeouts = 0
         # Wall-clock time (s) of the state after the last physics step, see joint_sample().
@@ -270,6 +270,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._step_cache = {}
         self._target = self._initial.copy()
         self._follower.reset(self._initial)
+        # Nothing streamed to an earlier session may move this one.
+        self._timed_targets.clear()
+        self._last_stream = None
         self.bodies = load_scene(self._client, self.scene_spec)
         self._running.set()
         self._thread = threading.Thread(target=self._step_loop, name="pybullet-step", daemon=True)
@@ -287,6 +290,8 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             # The step loop left its last readings here: without a simulation they must not
             # be served as the robot's state (reads then say NOT_CONNECTED).
             self._step_cache = {}
+            self._timed_targets.clear()
+            self._last_stream = None
 
     # -- template: state -------------------------------------------------------------------
     def _require_connection(self):
@@ -357,7 +362,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             if self._path is not None:
                 raise HwInterfaceError("a MoveJ/MoveL is running; STOP it before streaming", Result.BUSY)
             if self.real_time:
-                self._timed_targets.add(time.time(), target)
+                # The steps' own clock (monotonic): a wall-clock step (NTP, a resumed VM)
+                # must not delay every target that follows.
+                self._timed_targets.add(time.perf_counter(), target)
             else:
                 self._follower.set_goal(target)
                 self._last_stream = self._sim_time
@@ -541,7 +548,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 if self._path is None:
                     # The step scheduled at next_tick (wall clock) applies the newest target
                     # that had arrived by then, however late the thread runs it.
-                    goal = self._timed_targets.due(next_tick + to_wall)
+                    goal = self._timed_targets.due(next_tick)
                     if goal is not None:
                         self._follower.set_goal(goal)
                         self._last_stream = self._sim_time
