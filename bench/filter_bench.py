@@ -359,6 +359,8 @@ def choose_drift(data, curve):
         for w in DRIFT_WINDOWS
     }
     shut = [p for p in curve if p["params"]["drift_threshold"] > reach[str(p["params"]["drift_window"])]]
+    if not shut:
+        raise SystemExit(f"filter_bench: no swept drift threshold lies above the still hands' net speeds {reach}")
     chosen = min(shut, key=lambda p: p["lag_mm"])
     schema = FILTER_PARAMS.params["one_euro"].schema.defaults()
     shipped = {k: schema[k] for k in ("drift_window", "drift_threshold")}
