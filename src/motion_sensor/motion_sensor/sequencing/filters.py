@@ -180,7 +180,7 @@ class OneEuroFilter:
     wanders back and forth at up to the gate's speed over 0.2 s (a hand opening and closing
     moves it so), but over a longer window it nets less, while a slow deliberate move keeps
     its speed over any window. The threshold lies above what the still recordings net over that window
-    (bench/filter_bench.py), so a still hand is filtered as without it.
+    (bench/filter_bench.py), so the still hands recorded there are filtered as without it.
     """
 
     # Defaults from bench/filter_bench.py on the real recordings: steadier than mean-10
