@@ -50,3 +50,14 @@ def test_samples_outside_the_stream_or_out_of_order_are_not_used():
     lag.measured(0.5, _path(0.5))  # stamped before the sample before it
     lag.measured(0.6, [0.0, 0.0, 0.0])  # another arm's joints
     assert lag.lag_s() == 0.02 and not lag.measuring
+
+
+def test_a_stall_of_the_stream_does_not_move_the_measured_lag():
+    """A client or server held up for 60 ms: the arm falls behind its stream for a few
+    samples, which a least squares over the window took in (18.9 ms against 12-13)."""
+    lag = _feed(StreamLag(0.0), 0.0125)
+    for t in np.arange(2.0, 2.2, 0.01):
+        lag.sent(t, _path(t))
+    for t in np.arange(2.0, 2.1, 0.01) + 0.0037:  # ten samples 60 ms behind the stream
+        lag.measured(t, _path(t - 0.06))
+    assert lag.lag_s() == pytest.approx(0.0125, abs=0.0003)
