@@ -50,35 +50,53 @@ class StreamLag:
         self.most_s = float(most_s)
         self._sent = StampedHistory(maxlen=400)  # 4 s at the replay's 100 Hz
         self._terms = deque(maxlen=window)  # (the sample's own lag, velocity . velocity) per moving sample
-        self._previous = None  # (moment, joints) of the last measured sample
+        self._previous = None  # (moment, joints) of the last sample taken in
+        # Samples not taken in yet: each waits for a target sent after it. The server's
+        # samples and the replay's sends are both 100 Hz; at some phases every sample came
+        # just before the next send, and a sample judged on arrival was never used.
+        self._waiting = deque(maxlen=50)
         self._lock = threading.Lock()
 
     def sent(self, moment: float, target) -> None:
         """A target the stream sent at ``moment``."""
         with self._lock:
             self._sent.add(moment, np.asarray(target, dtype=np.float64))
+            self._take_in()
 
     def measured(self, moment: float, joints) -> None:
         """The arm's joints measured at ``moment`` (the state's own stamp)."""
-        joints = np.asarray(joints, dtype=np.float64)
         with self._lock:
-            previous, self._previous = self._previous, (float(moment), joints)
+            self._waiting.append((float(moment), np.asarray(joints, dtype=np.float64)))
+            self._take_in()
+
+    def _take_in(self) -> None:
+        """Each waiting sample with a target sent after it, in order (caller holds the lock)."""
+        newest = self._sent.newest()
+        while self._waiting:
+            moment, joints = self._waiting[0]
+            previous = self._previous
             if previous is None or moment <= previous[0] or previous[1].shape != joints.shape:
-                return
-            span = moment - previous[0]
-            velocity = (joints - previous[1]) / span
-            if float(np.max(np.abs(velocity))) < self.min_speed:
-                return
-            middle = previous[0] + 0.5 * span  # the velocity is the one between the two samples
-            found = self._sent.around(middle)
-            if found is None or found[1][0] <= middle or found[0][0] > middle:
-                return  # no target sent on both sides of the sample: not in the stream
-            (_, before), (_, after), u = found
-            if before.shape != joints.shape:
-                return
-            behind = before + (after - before) * u - 0.5 * (joints + previous[1])
-            power = float(np.dot(velocity, velocity))
-            self._terms.append((float(np.dot(behind, velocity)) / power, power))
+                self._previous = self._waiting.popleft()
+                continue
+            middle = previous[0] + 0.5 * (moment - previous[0])  # the velocity is the one between the two
+            if newest is None or newest[0] <= middle:
+                return  # no target after it yet
+            self._previous = self._waiting.popleft()
+            self._add_term(previous, moment, joints, middle)
+
+    def _add_term(self, previous, moment: float, joints, middle: float) -> None:
+        velocity = (joints - previous[1]) / (moment - previous[0])
+        if float(np.max(np.abs(velocity))) < self.min_speed:
+            return
+        found = self._sent.around(middle)
+        if found is None or found[0][0] > middle:
+            return  # no target sent before the sample: not in the stream
+        (_, before), (_, after), u = found
+        if before.shape != joints.shape:
+            return
+        behind = before + (after - before) * u - 0.5 * (joints + previous[1])
+        power = float(np.dot(velocity, velocity))
+        self._terms.append((float(np.dot(behind, velocity)) / power, power))
 
     def lag_s(self) -> float:
         """The measured lag (s), or ``start_s`` while too little motion was measured."""

@@ -61,3 +61,13 @@ def test_a_stall_of_the_stream_does_not_move_the_measured_lag():
     for t in np.arange(2.0, 2.1, 0.01) + 0.0037:  # ten samples 60 ms behind the stream
         lag.measured(t, _path(t - 0.06))
     assert lag.lag_s() == pytest.approx(0.0125, abs=0.0003)
+
+
+def test_a_sample_that_comes_before_the_next_target_is_used_once_it_is_sent():
+    """The server's samples and the replay's sends are both 100 Hz: at some phases every
+    sample comes just before the target after it is sent."""
+    lag = StreamLag(0.0)
+    for t in np.arange(0.0, 2.0, 0.01):
+        lag.measured(t - 0.001, _path(t - 0.001 - 0.0125))  # stamped 1 ms before this send
+        lag.sent(t, _path(t))
+    assert lag.measuring and lag.lag_s() == pytest.approx(0.0125, abs=0.0003)
