@@ -76,7 +76,11 @@ def test_upright_hand_axes_in_the_camera_frame():
     assert axes[2, 0] > 0.98  # fingers up (REP 103 +z)
     assert axes[0, 2] > 0.98  # back of the hand away from the camera (+x)
     assert hand.hands_num == 1 and hand.hand_types == ("right",)
-    assert np.allclose(hand.position[1:], 0.0, atol=0.003) and 0.79 < hand.position[0] < 0.80
+    assert np.allclose(hand.position[1:], 0.0, atol=0.006) and 0.79 < hand.position[0] < 0.80
+    # The estimate the palm model corrects, centred on this hand's palm ellipsoid; the model,
+    # trained on SHREC's palm joint too, puts the palm 3-4 mm further towards the fingers.
+    estimate = DepthHandTracker({"palm_model": False}).track(depth, INTR).position
+    assert np.allclose(estimate[1:], 0.0, atol=0.003) and 0.79 < estimate[0] < 0.80
 
 
 def test_grab_strength_open_and_fist():

@@ -19,6 +19,7 @@ Its modules:
 - ``camera_intrinsics``: the pinhole camera model's re-export for the camera devices;
 - ``depth_image``: depth image decoding (16UC1 mm, 32FC1 m, Kinect 11-bit);
 - ``depth_hand``: hand tracking in depth images;
+- ``depth_palm_model``: the learned correction of the depth tracker's palm centre (ONNX);
 - ``depth_device``: depth images from a topic as a device;
 - ``kinect``: a Kinect v1 through libfreenect (or a fakenect dump) as a device;
 - ``fakenect``: fakenect dumps: writing them, and the stub Debian lacks;

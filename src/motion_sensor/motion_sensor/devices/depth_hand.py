@@ -30,7 +30,12 @@ an operator reaching towards it (the paper's Kinect set-up):
    beyond the wrist, within ``palm_core_radius_m`` of the maximum), and ``CoreBlend``
    spreads a switch between the two over frames. The palm centre is reported
    ``palm_half_thickness_m`` behind the surface point along the normal (step 3), met by
-   the pixel's ray at h / cos(tilt), the tilt capped at 60 degrees.
+   the pixel's ray at h / cos(tilt), the tilt capped at 60 degrees. With ``palm_model``
+   a small network (``depth_palm_model``) looks at a depth crop of the whole hand around
+   that estimate and moves it ``palm_model_weight`` of the way to where it puts the palm
+   centre, which holds where the widest part does not (a palm tilted well away); an
+   implausible output (further than ``palm_model_max_offset_m``) or no usable crop leaves
+   the estimate as it is.
 3. **Orientation** from principal axes: the palm normal is the least-variance axis of the
    3-D points of the palm disc, the hand axis the main axis of the points within
    ``hand_radius_m`` of the centre (made orthogonal to the normal), pointing away from the
@@ -54,6 +59,7 @@ from scipy.spatial.transform import Rotation
 
 from motion_common.params import Param, ParamSchema
 from motion_sensor.devices.camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
+from motion_sensor.devices.depth_palm_model import PalmModel
 from motion_sensor.errors import MotionSensorError
 
 TRACKER_PARAMS = ParamSchema(
@@ -116,6 +122,27 @@ TRACKER_PARAMS = ParamSchema(
             unit="m",
             low=0,
             doc="the palm's core starts this far beyond the wrist the width profile found",
+        ),
+        Param(
+            "palm_model",
+            True,
+            doc="correct the palm centre with the shipped network (depth_palm_model); false: the estimate above",
+        ),
+        Param(
+            "palm_model_max_offset_m",
+            0.05,
+            unit="m",
+            low=0,
+            low_open=True,
+            high=0.15,
+            doc="a correction that would move the palm further than this is implausible: the estimate stands",
+        ),
+        Param(
+            "palm_model_weight",
+            0.8,
+            low=0,
+            high=1,
+            doc="the palm moves this fraction of the way from the estimate to the network's palm centre",
         ),
         Param("hand_radius_m", 0.1, unit="m", low=0.03, doc="points this close to the palm centre are the hand"),
         Param("palm_faces_camera", True, doc="the palm faces the camera (z, out of the back of the hand, points away)"),
@@ -243,6 +270,12 @@ class DepthHandTracker:
         self._last_position = None
         self._last_surface = None  # seen palm surface of the previous frame (optical)
         self._core_blend = CoreBlend()  # the maximum -> the palm core's centroid (see _palm_core)
+        # The learned correction of the palm centre (depth_palm_model), loaded once.
+        self.palm_model = (
+            PalmModel(max_offset_m=c["palm_model_max_offset_m"], weight=c["palm_model_weight"])
+            if c["palm_model"]
+            else None
+        )
         self._hand_id = 0
         self.last_reason = ""
 
@@ -570,4 +603,8 @@ class DepthHandTracker:
         surface = self._core_blend.update(centre, core)
         ray = surface / np.linalg.norm(surface)
         palm_centre = surface + ray * c["palm_half_thickness_m"] / max(abs(float(ray @ normal)), 0.5)
+        if self.palm_model is not None:
+            corrected = self.palm_model.correct(z, t0, l0, palm_centre, intr)
+            if corrected is not None:
+                palm_centre = corrected
         return palm_centre, rotation, grab
