@@ -20,7 +20,8 @@ Its subpackages and modules, by role:
   services; see ``motion_common.interface``), from which docs/interfaces.md is generated;
 - the hand frame: ``hand_sample`` (``HandSample``, the ROS-free form of a
   ``motion_sensor/hand`` message), ``errors``; ``ros_conversions`` (``hand`` message <->
-  ``HandSample``; needs the generated messages).
+  ``HandSample``; needs the generated messages);
+- ``onnx_session``: the onnxruntime session of a shipped network (gestures, depth palm).
 
 The names in ``__all__`` are imported from their module on first use, so ``import
 motion_sensor`` loads none of cv2, mediapipe, scipy or rospy.

@@ -32,6 +32,7 @@ import numpy as np
 
 from motion_sensor.devices.camera_intrinsics import Intrinsics
 from motion_sensor.errors import MotionSensorError
+from motion_sensor.onnx_session import cpu_session
 
 __all__ = [
     "CROP_M",
@@ -129,16 +130,7 @@ class PalmModel:
         self.weight = float(weight)
         if not os.path.isfile(self.model_path):
             raise MotionSensorError(f"depth palm model {self.model_path} not found (bench/train_depth_palm.py)")
-        import onnxruntime
-
-        options = onnxruntime.SessionOptions()
-        options.intra_op_num_threads = 1
-        options.inter_op_num_threads = 1
-        options.log_severity_level = 3
-        try:
-            self._session = onnxruntime.InferenceSession(self.model_path, options, providers=["CPUExecutionProvider"])
-        except Exception as exc:  # noqa: BLE001 - any unreadable model is the same user error
-            raise MotionSensorError(f"depth palm model {self.model_path} cannot be loaded: {exc}") from exc
+        self._session = cpu_session(self.model_path, "depth palm model")
         inputs = self._session.get_inputs()
         if [i.name for i in inputs] != ["crop"] or list(inputs[0].shape[1:]) != [2, CROP_PX, CROP_PX]:
             raise MotionSensorError(

@@ -16,6 +16,7 @@ import numpy as np
 from motion_sensor.errors import MotionSensorError
 from motion_sensor.gestures.skeleton_dataset import CLASSES_14, CLASSES_28
 from motion_sensor.gestures.skeleton_features import batch_features, to_model_frame
+from motion_sensor.onnx_session import cpu_session
 
 __all__ = ["DEFAULT_MODEL", "SkeletonResult", "SkeletonClassifier"]
 
@@ -58,16 +59,7 @@ class SkeletonClassifier:
             raise MotionSensorError(
                 f"skeleton gesture model {self.model_path} not found (train one with train_skeleton_gestures)"
             )
-        import onnxruntime
-
-        options = onnxruntime.SessionOptions()
-        options.intra_op_num_threads = threads
-        options.inter_op_num_threads = 1
-        options.log_severity_level = 3
-        try:
-            self._session = onnxruntime.InferenceSession(self.model_path, options, providers=["CPUExecutionProvider"])
-        except Exception as exc:  # noqa: BLE001 - any unreadable model is the same user error
-            raise MotionSensorError(f"skeleton gesture model {self.model_path} cannot be loaded: {exc}") from exc
+        self._session = cpu_session(self.model_path, "skeleton gesture model", threads)
         names = {i.name for i in self._session.get_inputs()}
         if names != {"jcd", "slow", "fast"}:
             raise MotionSensorError(f"{self.model_path}: expected inputs jcd, slow, fast, got {sorted(names)}")
