@@ -48,13 +48,14 @@ def test_record_demo_one_episode(tmp_path):
     assert summary["velocity"]["moving_frames"] > 10, summary["velocity"]
     assert 0.7 < summary["velocity"]["gain"] < 1.3, summary["velocity"]
     # The goal is 2 mm at every frame (docs/benchmarks.md). The replay streams the recorded
-    # joint path ahead by the recorded arm's lag (~11 ms): p95 0.15-0.54 mm, max 0.4-1.6 mm
-    # in most replays, but single frames of the fast save circle reached 2.2 and 4.3 mm in
-    # two of four replays of one episode on a machine loaded by other jobs, so the worst is
-    # bounded at 5 mm here (a teleporting palm in the teaching stream gave 7 mm, a first
-    # frame made from values seconds old 60-70 mm). Through the 10 Hz actions p95 was
-    # 0.9-1.4 mm. The p95 is bounded at half the goal: CI, with a core kept busy, gave 0.71 mm
-    # once. A recorder held up on a loaded machine no longer skips a frame (which put the next
+    # joint path ahead by the replaying arm's lag, measured as it runs: with one core kept
+    # busy p95 0.10-0.33 mm, max 0.8-1.7 mm in 11 of 13 replays, but a client or server
+    # held up for 10-90 ms puts single frames at 3-4 mm (and tens of mm when other jobs
+    # load the machine as well), so the worst is bounded at 5 mm here (a teleporting palm in
+    # the teaching stream gave 7 mm, a first frame made from values seconds old 60-70 mm),
+    # not at the goal. Through the 10 Hz actions p95 was 0.9-1.4 mm. The p95 is bounded at
+    # half the goal: CI, with a core kept busy, gave 0.71 mm once.
+    # A recorder held up on a loaded machine no longer skips a frame (which put the next
     # one a period off its instant), and none may be skipped here.
     replay = summary["replay"]
     assert replay["curve"] == "state", replay

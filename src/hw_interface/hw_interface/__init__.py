@@ -12,10 +12,12 @@ Its modules, by role:
   process of its own), ``ur_driver`` (Universal Robots over
   ur_rtde), ``industrial_driver`` (ROS-Industrial controllers over ``simple_message``, the
   wire format, and ``tcp``, how its sockets close), with ``trajectory`` (MoveJ/MoveL time
-  parameterisation) and ``stream_follower`` (streamed joint targets within the velocity
-  limits); the two drivers of real controllers share ``real_controller`` (arming,
-  reconnect backoff, moves watched on the measured joints) and ``driver_params`` (the
-  parameters they declare alike);
+  parameterisation), ``stream_follower`` (streamed joint targets within the velocity
+  limits) and ``timed_targets`` (the simulation's streamed targets applied at the step
+  scheduled after their arrival, however late the physics thread runs it); the two
+  drivers of real controllers share ``real_controller`` (arming, reconnect backoff, moves
+  watched on the measured joints) and ``driver_params`` (the parameters they declare
+  alike);
 - the server's core: ``protocol`` (commander.srv's command and result tables as enums),
   ``dispatcher`` (checks every request, then calls the driver), ``server_params`` (the
   server's parameters and its drivers' parameter check), ``status_log`` (which driver

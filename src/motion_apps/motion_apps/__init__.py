@@ -22,7 +22,8 @@ shared with the kitting application):
   ``dataset_store`` (one atomically committed version of the dataset per episode; the
   folder check), ``lerobot_reader`` and ``lerobot_readback`` (a dataset read back by
   LeRobot's own loader, as NumPy arrays), ``episode_replay`` (an episode's actions sent
-  again, the tool's error against the recording) and ``episode_report`` (the dataset's
+  again, the tool's error against the recording), ``stream_lag`` (how long the replaying
+  arm trails the stream, measured from its stamped joints) and ``episode_report`` (the dataset's
   summary and one episode's picture).
 
 Plain Python: no rospy outside ``nodes/``. The names in ``__all__`` are imported from
