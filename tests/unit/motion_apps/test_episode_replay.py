@@ -251,16 +251,16 @@ def test_a_lead_sends_the_targets_early_by_an_arms_extra_lag():
     assert _lagging_replay(states, actions, tools, extra, lead_s=extra)["tool_error_mm_max"] < 0.05
 
 
-def _wiggling_episode(lag, n=14, wiggle=0.004):
-    """Commands at 0.1 m/s with a ``wiggle`` of 7 Hz between the 10 Hz frames (the hand's
-    motion that the frames' actions do not hold), the arm ``lag`` s behind them: states,
-    actions, measured velocities, tools."""
+def _wiggling_episode(lag, n=14, wiggle=0.004, speed=0.1, hz=7.0):
+    """Commands at ``speed`` m/s with a ``wiggle`` of ``hz`` between the 10 Hz frames (the
+    hand's motion that the frames' actions do not hold), the arm ``lag`` s behind them:
+    states, actions, measured velocities, tools."""
 
     def command(t):
-        return 0.1 * t + wiggle * np.sin(2 * np.pi * 7.0 * t)
+        return speed * t + wiggle * np.sin(2 * np.pi * hz * t)
 
     def rate(t):
-        return 0.1 + wiggle * 2 * np.pi * 7.0 * np.cos(2 * np.pi * 7.0 * t)
+        return speed + wiggle * 2 * np.pi * hz * np.cos(2 * np.pi * hz * t)
 
     t = np.arange(n) / 10.0
 
@@ -310,22 +310,8 @@ def _live_lag_replay(arm_lag, recorded_lag, live) -> dict:
     """An episode recorded on an arm ``recorded_lag`` s behind its commands, replayed
     through its states on an arm ``arm_lag`` s behind its stream whose joints are sampled
     at 100 Hz (``live``: fed to a StreamLag, as the node does from joint_states)."""
-    n = 30
-    t = np.arange(n) / 10.0
-
-    def command(t):  # 0.5 m/s with a 5 Hz wiggle: the demo's save circle's speeds
-        return 0.5 * t + 0.01 * np.sin(2 * np.pi * 5.0 * t)
-
-    def rate(t):
-        return 0.5 + 0.01 * 2 * np.pi * 5.0 * np.cos(2 * np.pi * 5.0 * t)
-
-    def xyz(x):
-        return np.stack([x, np.zeros_like(x), np.full_like(x, 0.5)], axis=1)
-
-    states = np.hstack([xyz(command(t - recorded_lag)), np.zeros((n, 1))])
-    actions = np.hstack([xyz(command(t)), np.zeros((n, 1))])
-    velocities = np.hstack([rate(t - recorded_lag)[:, None], np.zeros((n, 2))])
-    tools = np.hstack([states[:, :3], np.tile([0, 0, 0, 1], (n, 1))])
+    # 0.5 m/s with a 5 Hz wiggle: the demo's save circle's speeds
+    states, actions, velocities, tools = _wiggling_episode(recorded_lag, n=30, wiggle=0.01, speed=0.5, hz=5.0)
     now, sent = [0.0], []
     arm = _Arm()
     arm.set_joints = lambda joints: sent.append((now[0], np.array(joints)))
