@@ -546,7 +546,7 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                 if self._client is None:
                     break
                 if self._path is None:
-                    # The step scheduled at next_tick (wall clock) applies the newest target
+                    # The step scheduled at next_tick (perf_counter) applies the newest target
                     # that had arrived by then, however late the thread runs it.
                     goal = self._timed_targets.due(next_tick)
                     if goal is not None:
