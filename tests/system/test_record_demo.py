@@ -44,9 +44,12 @@ def test_record_demo_one_episode(tmp_path):
     assert summary["replay"]["compared"] == summary["frames"] - 1, summary["replay"]
     assert summary["replay"]["refused"] == 0
     # Joint velocities are recorded (the drivers' joint_states carry none: they come from the
-    # measured positions) and agree with the recorded positions' own rate.
+    # measured positions) and agree with the recorded positions' own rate. The velocities are
+    # the rate over one 10 ms state interval, the rate over two 0.1 s frames: their gain was
+    # 0.91-1.32 on this machine (1.32 with a core kept busy); missing velocities give 0, a
+    # sign error -1, degrees 57.
     assert summary["velocity"]["moving_frames"] > 10, summary["velocity"]
-    assert 0.7 < summary["velocity"]["gain"] < 1.3, summary["velocity"]
+    assert 0.6 < summary["velocity"]["gain"] < 1.5, summary["velocity"]
     # The goal is 2 mm at every frame (docs/benchmarks.md). The replay streams the recorded
     # joint path ahead by the replaying arm's lag, measured as it runs: with one core kept
     # busy p95 0.10-0.33 mm, max 0.8-1.7 mm in 11 of 13 replays, but a client or server
