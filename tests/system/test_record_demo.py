@@ -62,6 +62,7 @@ def test_record_demo_one_episode(tmp_path):
     # one a period off its instant), and none may be skipped here.
     replay = summary["replay"]
     assert replay["curve"] == "state", replay
+    assert replay["lag_measured"], replay  # the lead followed the replaying arm's own lag
     assert replay["tool_error_mm_p95"] < 1.0, replay
     assert replay["tool_error_mm_max"] < 5.0, replay
     with open(run / "record_demo.png", "rb") as stream:

@@ -214,8 +214,10 @@ class EpisodeReplay:
         start = self.clock()
         for step in range(steps + 1):
             if follow_lag:  # toward the replaying arm's measured lag, a little a step
-                lead_s += min(max(stream_lag.lag_s() - lead_s, -LEAD_CHANGE_S), LEAD_CHANGE_S)
-                lead = round(lead_s / step_s, 9)
+                measured = stream_lag.lag_s()
+                if np.isfinite(measured):  # never a lead that is no number: the last one stands
+                    lead_s += min(max(measured - lead_s, -LEAD_CHANGE_S), LEAD_CHANGE_S)
+                    lead = round(lead_s / step_s, 9)
             i, k = divmod(step, self.substeps)
             if k == 0:  # frame i's moment: its tool is measured
                 self._wait_until(start + i * self.period)

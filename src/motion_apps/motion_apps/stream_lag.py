@@ -63,11 +63,16 @@ class StreamLag:
             self._sent.add(moment, np.asarray(target, dtype=np.float64))
             self._take_in()
 
-    def measured(self, moment: float, joints) -> None:
-        """The arm's joints measured at ``moment`` (the state's own stamp)."""
+    def measured(self, moment: float, joints) -> bool:
+        """The arm's joints measured at ``moment`` (the state's own stamp); False (and not
+        used) for a sample that is empty or not finite, whose velocity would be no number."""
+        joints = np.asarray(joints, dtype=np.float64)
+        if joints.size == 0 or not np.all(np.isfinite(joints)) or not np.isfinite(moment):
+            return False
         with self._lock:
-            self._waiting.append((float(moment), np.asarray(joints, dtype=np.float64)))
+            self._waiting.append((float(moment), joints))
             self._take_in()
+        return True
 
     def _take_in(self) -> None:
         """Each waiting sample with a target sent after it, in order (caller holds the lock)."""
@@ -102,6 +107,7 @@ class StreamLag:
         """The measured lag (s), or ``start_s`` while too little motion was measured."""
         with self._lock:
             terms = np.asarray(self._terms) if self._terms else np.zeros((0, 2))
+        terms = terms[np.all(np.isfinite(terms), axis=1)]
         if terms[:, 1].sum() < self.min_power:
             return self.start_s
         terms = terms[np.argsort(terms[:, 0])]

@@ -355,3 +355,26 @@ def test_replay_runs_ahead_by_the_replaying_arms_measured_lag_not_the_recorded_o
     assert live["lag_measured"] and live["stream_lead_ms"] == pytest.approx(12.5, abs=0.4)
     assert recorded["tool_error_mm_p50"] > 0.4 and recorded["max_after_1s"] > 1.0
     assert live["tool_error_mm_p50"] < 0.2 and live["max_after_1s"] < 0.3
+
+
+class _NoNumberLag:
+    """A lag measurement that says no number (what a NaN joint sample once made of it)."""
+
+    measuring = False
+
+    def sent(self, moment, target):
+        pass
+
+    def lag_s(self):
+        return float("nan")
+
+
+def test_a_lag_that_is_no_number_leaves_the_lead_where_it_was():
+    states, actions, velocities, tools = _wiggling_episode(0.0105, n=10, wiggle=0.01, speed=0.5, hz=5.0)
+    arm, sent = _Arm(), []
+    arm.set_joints = sent.append
+    run = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=lambda: 0.0, sleep=lambda s: None, settle_s=0.0)
+    report = run.run(states, actions, tools, velocities=velocities, through_states=True, stream_lag=_NoNumberLag())
+    summary = report.summary()
+    assert summary["compared"] == 9 and summary["stream_lead_ms"] == pytest.approx(10.5, abs=0.3)
+    assert len(sent) == 91 and np.all(np.isfinite(sent))

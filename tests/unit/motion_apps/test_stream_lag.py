@@ -71,3 +71,19 @@ def test_a_sample_that_comes_before_the_next_target_is_used_once_it_is_sent():
         lag.measured(t - 0.001, _path(t - 0.001 - 0.0125))  # stamped 1 ms before this send
         lag.sent(t, _path(t))
     assert lag.measuring and lag.lag_s() == pytest.approx(0.0125, abs=0.0003)
+
+
+def test_a_sample_that_is_empty_or_no_number_is_refused_and_the_lag_stays_a_number():
+    lag = StreamLag(0.0)
+    sends = np.arange(0.0, 2.0, 0.01)
+    for t in sends:
+        lag.sent(t, _path(t))
+    for t in np.arange(0.1, 1.9, 0.01) + 0.0037:
+        joints = _path(t - 0.0125)
+        if abs(t - 1.0037) < 1e-9:
+            assert not lag.measured(t, [float("nan"), joints[1]])  # one joint read as NaN
+            assert not lag.measured(t, [])  # a JointState with no positions
+            assert not lag.measured(float("inf"), joints)
+            continue
+        assert lag.measured(t, joints)
+    assert np.isfinite(lag.lag_s()) and lag.lag_s() == pytest.approx(0.0125, abs=0.0005)
