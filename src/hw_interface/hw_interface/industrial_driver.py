@@ -791,6 +791,10 @@ class SimpleMessageDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
             if stopped:
                 raise self._interrupted(kind, token, self._stop_reason) from None
             self.stop(reason=f"{kind} failed")
+            if exc.result == Result.NOT_CONNECTED:
+                # The connection dropped while the points went out (before a reply came): the
+                # move is cut short, as one whose connection drops while it is watched.
+                raise self._interrupted(kind, token, f"connection lost ({exc})") from None
             raise
         self._watch(kind, token, deadline, timeout, error_of)
 

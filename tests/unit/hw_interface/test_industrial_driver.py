@@ -239,6 +239,18 @@ def test_dropped_connections_interrupt_a_move_and_are_reconnected(driver, fake):
     assert fake.connections >= 4  # two ports, twice
 
 
+def test_a_connection_dropped_before_a_points_reply_interrupts_the_move(driver, fake):
+    # The point reached the controller, whose reply never comes before the drop: the move was
+    # cut short (INTERRUPTED, as one whose connection drops while it is watched).
+    d = driver(reply_timeout=5.0)
+    fake.silent = True
+    runner, _, _ = stop_during(lambda: d.move_j(LONG), lambda: len(fake.requests) > 0, fake.drop_connections)
+    assert runner.error.result == Result.INTERRUPTED and "connection lost" in str(runner.error), runner.error
+    fake.silent = False
+    d.move_j(START)  # reconnects, then arrives
+    np.testing.assert_allclose(fake.q, START, atol=d.goal_tolerance)
+
+
 def test_reconnect_backs_off_outside_the_driver_lock(fake):
     sleep = LockProbingSleep()
     d = sleep.driver = make(fake, reconnect_attempts=3, reconnect_backoff=0.25, sleep=sleep, connect_timeout=0.3)
