@@ -37,14 +37,16 @@ from bench_common import ROOT
 for package in ("motion_sensor", "motion_common"):
     sys.path.insert(0, os.path.join(ROOT, "src", package))
 
+from depth_hand_bench import path_errors  # noqa: E402
 from motion_common.atomic_file import write_atomic  # noqa: E402
-from motion_sensor.devices.depth_hand import DepthHandTracker  # noqa: E402
+from motion_sensor.devices.depth_hand import TRACKER_PARAMS, DepthHandTracker  # noqa: E402
 from motion_sensor.devices.depth_image import decode_depth, encode_depth_mm  # noqa: E402
 from motion_sensor.devices.depth_palm_model import (  # noqa: E402
     CROP_M,
     CROP_PX,
     DEPTH_SCALE_M,
     OFFSET_SCALE_M,
+    corrected,
     crop_channels,
     crop_window,
     palm_crop,
@@ -53,6 +55,7 @@ from motion_sensor.testing.skeleton_depth import PALM, render_skeleton  # noqa: 
 from motion_sensor.testing.synthetic_depth import DEFAULT_INTRINSICS as INTR  # noqa: E402
 from motion_sensor.testing.synthetic_depth import hand_path, render_hand  # noqa: E402
 
+TRACKER = TRACKER_PARAMS.defaults()
 OUT = os.path.join(ROOT, "src", "motion_sensor", "data")
 SYNTHETIC_FRAMES = 300
 SYNTHETIC_NOISE = 0.0015
@@ -245,21 +248,9 @@ def predict(net, crops):
 
 
 def aligned_rms_mm(seen, truth, sequence):
-    """Per-sequence aligned RMS (mm), the bench's figure."""
-    error = seen - truth
-    out = np.zeros(len(error))
-    for s in np.unique(sequence):
-        mine = sequence == s
-        out[mine] = np.linalg.norm(error[mine] - error[mine].mean(axis=0), axis=1)
-    return float(np.sqrt(np.mean(out**2)) * 1000), float(np.percentile(out, 95) * 1000)
-
-
-def corrected(estimate, origin, offset, max_offset_m, weight):
-    """The tracker's palm as PalmModel.correct makes it, and the fraction that fell back."""
-    correction = origin + offset - estimate
-    far = np.linalg.norm(correction, axis=1) > max_offset_m
-    correction[far] = 0.0
-    return estimate + weight * correction, float(far.mean())
+    """Per-sequence aligned RMS and p95 (mm), the depth bench's figure (its path_errors)."""
+    figures = path_errors(seen, truth, sequence, np.ones(len(seen), bool))["per_sequence_aligned"]
+    return figures["rms_mm"], figures["p95_mm"]
 
 
 def export(net, path):
@@ -289,8 +280,15 @@ def main():
     parser.add_argument("--shift", type=int, default=6, help="crop shifts in training, cells (up to 8)")
     parser.add_argument("--depth-jitter", type=float, default=0.02, help="reference depth moved in training (m)")
     parser.add_argument("--members", type=int, default=2, help="networks averaged (seeds seed, seed + 1, ..)")
-    parser.add_argument("--max-offset", type=float, default=0.05, help="the tracker's palm_model_max_offset_m")
-    parser.add_argument("--weight", type=float, default=0.8, help="the tracker's palm_model_weight")
+    parser.add_argument(
+        "--max-offset",
+        type=float,
+        default=TRACKER["palm_model_max_offset_m"],
+        help="the tracker's palm_model_max_offset_m",
+    )
+    parser.add_argument(
+        "--weight", type=float, default=TRACKER["palm_model_weight"], help="the tracker's palm_model_weight"
+    )
     parser.add_argument("--cache", help="npz of the tracked frames: read if it exists, else written")
     parser.add_argument("--validate-subjects", help="comma-separated tuning subjects left out and measured")
     parser.add_argument("--out", default=OUT, help="folder of depth_palm.onnx and depth_palm.json")
@@ -319,9 +317,10 @@ def main():
         rows = ~train_rows & frames["bench"]
         crops, _ = batch(frames["crop"][rows], frames["origin"][rows], frames["truth"][rows], None, 0, 0.0, 0.0)
         offset = predict(net, crops)
-        palm, fallback = corrected(
+        palm, fell_back = corrected(
             frames["estimate"][rows], frames["origin"][rows], offset, args.max_offset, args.weight
         )
+        fallback = float(fell_back.mean())
         seq, truth = frames["sequence"][rows], frames["truth"][rows]
         before = aligned_rms_mm(frames["estimate"][rows], truth, seq)
         after = aligned_rms_mm(palm, truth, seq)

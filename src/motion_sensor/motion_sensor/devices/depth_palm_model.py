@@ -44,6 +44,7 @@ __all__ = [
     "crop_window",
     "crop_channels",
     "palm_crop",
+    "corrected",
     "PalmModel",
 ]
 
@@ -120,6 +121,17 @@ def palm_crop(z: np.ndarray, top: int, left: int, estimate: np.ndarray, intr: In
     return PalmCrop(crop_channels(window[0], window[1]), window[2])
 
 
+def corrected(estimate, origin, offset, max_offset_m: float, weight: float):
+    """(palm centres, fell back) for estimates ``estimate`` (..., 3), their crops' centre
+    points ``origin`` and the network's ``offset`` (m): ``weight`` of the way from each
+    estimate to ``origin + offset``; the estimate itself where that correction is not finite
+    or further than ``max_offset_m``."""
+    correction = np.asarray(origin, dtype=float) + np.asarray(offset, dtype=float) - estimate
+    fell_back = ~np.all(np.isfinite(correction), axis=-1) | (np.linalg.norm(correction, axis=-1) > max_offset_m)
+    correction = np.where(fell_back[..., None], 0.0, correction)
+    return estimate + weight * correction, fell_back
+
+
 class PalmModel:
     """The exported network (input ``crop`` (n, 2, CROP_PX, CROP_PX), output ``offset``
     (n, 3)), single-threaded on the CPU."""
@@ -149,7 +161,7 @@ class PalmModel:
         crop = palm_crop(z, top, left, estimate, intr)
         if crop is None:
             return None
-        correction = crop.origin + self.offsets(crop.image[None])[0] - estimate
-        if not np.all(np.isfinite(correction)) or float(np.linalg.norm(correction)) > self.max_offset_m:
-            return None
-        return estimate + self.weight * correction
+        palm, fell_back = corrected(
+            estimate, crop.origin, self.offsets(crop.image[None])[0], self.max_offset_m, self.weight
+        )
+        return None if fell_back else palm
