@@ -4,7 +4,8 @@ imports them, as ``hw_interface.testing``).
 Its modules:
 
 - ``synthetic_depth``: a synthetic hand rendered as depth images;
-- ``skeleton_depth``: a real hand rendered as depth images from its tracked skeleton.
+- ``skeleton_depth``: a real hand rendered as depth images from its tracked skeleton;
+- ``varied_hands``: that hand's bones, shape, tilt and distance varied per sequence.
 """
 
 from motion_common.lazy_exports import lazy_exports
@@ -18,6 +19,8 @@ _PUBLIC = {
     "SensorNoise": "skeleton_depth",
     "render_skeleton": "skeleton_depth",
     "place_in_view": "skeleton_depth",
+    "HandVariation": "varied_hands",
+    "vary_sequence": "varied_hands",
 }
 __all__ = list(_PUBLIC)
 
