@@ -11,7 +11,8 @@ Its modules, by role:
 - drivers: ``sim_driver`` (pybullet simulation; ``scene_camera`` renders its cell in a
   process of its own), ``ur_driver`` (Universal Robots over
   ur_rtde), ``industrial_driver`` (ROS-Industrial controllers over ``simple_message``, the
-  wire format, and ``tcp``, how its sockets close), with ``trajectory`` (MoveJ/MoveL time
+  wire format, ``tcp``, how its sockets close, and ``arrival_stamps``, when the controller
+  sampled the states it sends without a time), with ``trajectory`` (MoveJ/MoveL time
   parameterisation), ``stream_follower`` (streamed joint targets within the velocity
   limits) and ``timed_targets`` (the simulation's streamed targets applied at the step
   scheduled after their arrival, however late the physics thread runs it); the two

@@ -30,6 +30,7 @@ from motion_common.kinematics import RobotKinematics
 from motion_common.params import Param, ParamSchema
 
 from . import simple_message as sm
+from .arrival_stamps import ArrivalStamps
 from .driver_params import ARMING_PARAMS, GOAL_TOLERANCE_PARAMS, RECONNECT_PARAMS, positive_param
 from .errors import HwInterfaceError
 from .protocol import Result
@@ -217,7 +218,7 @@ class SimpleMessageDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
         self._logged_in = False
         self._pending = collections.deque()
         self._joints = None  # latest measured joints (URDF order)
-        self._joints_wall = 0.0  # time.time() of their arrival
+        self._joints_wall = 0.0  # time.time() when they were sampled (estimated, ArrivalStamps)
         self._joints_mono = 0.0  # clock() of their arrival
         self._status = sm.RobotStatus()
         self._state_event = threading.Condition(self._lock)
@@ -422,6 +423,12 @@ class SimpleMessageDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
     # -- readers (one thread per connection) -----------------------------------------------
     def _frames(self, sock, generation):
         """Yield the frames of ``sock`` until it closes; a close mid-frame is a truncated frame."""
+        for chunk in self._chunks(sock, generation):
+            yield from chunk
+
+    def _chunks(self, sock, generation):
+        """Yield the frames of ``sock`` as lists, one per read: the frames that arrived
+        together. A close mid-frame is a truncated frame."""
         reader = sm.FrameReader(self.byte_order)
         while True:
             with self._lock:
@@ -439,47 +446,67 @@ class SimpleMessageDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
                     )
                 self._lost(generation, "the controller closed the connection")
                 return
-            yield from reader.feed(data)
+            yield list(reader.feed(data))
 
     def _state_reader(self, sock, generation):
+        # States carry no time of their own: each is stamped with its estimated sample time
+        # (ArrivalStamps), not its receipt, so that states a busy reader thread read late
+        # do not show speeds many times the arm's. Of the joint states read together only
+        # the newest is taken (each is checked): the older ones were superseded before
+        # anyone could have read them.
+        stamps = ArrivalStamps()
         try:
-            for frame in self._frames(sock, generation):
-                if frame.header.comm_type != sm.TOPIC and frame.header.msg_type not in (sm.PING,):
-                    raise sm.SimpleMessageError(
-                        f"message type {frame.header.msg_type} with comm_type {frame.header.comm_type} "
-                        "on the state port"
-                    )
-                if sm.is_vendor_specific(frame.header.msg_type):
-                    self.ignored_messages += 1
-                    continue
-                message = sm.decode_message(frame, self.byte_order)
-                if isinstance(message, sm.RobotStatus):
-                    with self._lock:
-                        self._status = message
-                    if message.e_stopped == sm.ON or message.in_error == sm.ON:
-                        self._wake.set()
-                elif isinstance(message, (sm.JointPosition, sm.JointFeedback)):
-                    values = message.joints if isinstance(message, sm.JointPosition) else message.positions
-                    self._joint_state(np.asarray(values, dtype=float), generation)
-                elif not isinstance(message, sm.Ping):
-                    raise sm.SimpleMessageError(f"unexpected {type(message).__name__} on the state port")
+            for chunk in self._chunks(sock, generation):
+                arrival = self._clock()
+                states = [joints for joints in map(self._state_frame, chunk) if joints is not None]
+                if states:
+                    self._joint_state(states[-1], stamps.stamps(arrival, len(states))[-1], generation)
         except sm.SimpleMessageError as exc:
             self._lost(generation, f"state port: {exc}", protocol=True)
 
-    def _joint_state(self, slots, generation):
+    def _state_frame(self, frame):
+        """Handle one state-port frame; return the joints (URDF order) of a joint state,
+        checked but not yet taken, else None."""
+        if frame.header.comm_type != sm.TOPIC and frame.header.msg_type not in (sm.PING,):
+            raise sm.SimpleMessageError(
+                f"message type {frame.header.msg_type} with comm_type {frame.header.comm_type} on the state port"
+            )
+        if sm.is_vendor_specific(frame.header.msg_type):
+            self.ignored_messages += 1
+            return None
+        message = sm.decode_message(frame, self.byte_order)
+        if isinstance(message, sm.RobotStatus):
+            with self._lock:
+                self._status = message
+            if message.e_stopped == sm.ON or message.in_error == sm.ON:
+                self._wake.set()
+        elif isinstance(message, (sm.JointPosition, sm.JointFeedback)):
+            values = message.joints if isinstance(message, sm.JointPosition) else message.positions
+            return self._robot_joints(np.asarray(values, dtype=float))
+        elif not isinstance(message, sm.Ping):
+            raise sm.SimpleMessageError(f"unexpected {type(message).__name__} on the state port")
+        return None
+
+    def _robot_joints(self, slots):
+        """The robot's joints (URDF order) from a state's slots; a filled slot the robot
+        does not have is bad data."""
         extra = [i for i in range(sm.MAX_JOINTS) if i not in self.slots and slots[i] != 0.0]
         if extra:
             raise sm.SimpleMessageError(
                 f"the controller reports joint slots {extra} that the robot ({self.kinematics.dof} joints, "
                 f"slots {self.slots.tolist()}) does not have: check joint_slots and the robot model"
             )
-        joints = slots[self.slots]
+        return slots[self.slots]
+
+    def _joint_state(self, joints, sampled, generation):
+        """Take ``joints``, sampled at ``sampled`` (the driver's clock)."""
         with self._lock:
             if generation != self._generation:
                 return
+            now = self._clock()
             self._joints = joints
-            self._joints_wall = time.time()
-            self._joints_mono = self._clock()
+            self._joints_wall = time.time() - (now - sampled)
+            self._joints_mono = now
             self._state_event.notify_all()
 
     def _motion_reader(self, sock, generation):

@@ -10,10 +10,12 @@ import os
 import socket
 import struct
 import time
+import types
 
 import numpy as np
 import pytest
 
+from hw_interface import industrial_driver
 from hw_interface import simple_message as sm
 from hw_interface.dispatcher import CommandDispatcher
 from hw_interface.errors import HwInterfaceError
@@ -432,3 +434,38 @@ def test_no_gripper_or_io_in_the_standard_set(driver):
         with pytest.raises(HwInterfaceError) as err:
             call()
         assert err.value.result == Result.DRIVER_FAULT
+
+
+def test_states_a_late_reader_took_together_are_stamped_as_sampled_not_as_received(fake, monkeypatch):
+    # The driver's clock and the wall clock are the test's: a state's stamp is then exact.
+    clock = [100.0]
+    monkeypatch.setattr(
+        industrial_driver, "time", types.SimpleNamespace(time=lambda: clock[0] + 1000.0, sleep=time.sleep)
+    )
+    d = make(fake, clock=lambda: clock[0], state_timeout=60.0)
+    d.login()
+    try:
+        fake.pause_state = True
+        time.sleep(0.05)  # a state already on its way arrives (stamped 1100, like login's)
+
+        def state(i):
+            slots = np.zeros(sm.MAX_JOINTS)
+            slots[:6] = START + 0.001 * (i + 1)  # none is the state the controller had
+            return sm.encode(sm.JointPosition(0, tuple(slots)), byte_order=fake.byte_order)
+
+        def arrives(data, at, last):
+            clock[0] = at
+            fake.send_raw_state(data)
+            assert wait_for(lambda: abs(d.get_robot_joints()[0] - (START[0] + 0.001 * (last + 1))) < 1e-6)
+            return d.joint_sample()[0] - 1000.0
+
+        stamps = [arrives(state(i), 101.0 + 0.01 * i, i) for i in range(20)]  # on time
+        np.testing.assert_allclose(stamps, 101.0 + 0.01 * np.arange(20), atol=1e-9)
+        # The reader was busy: the states sampled at 101.20, 101.21 and 101.22 are read
+        # together at 101.227, then the next one on time.
+        burst = arrives(state(20) + state(21) + state(22), 101.227, 22)
+        after = arrives(state(23), 101.23, 23)
+        # Stamped on receipt, 101.227 then 101.23: a speed 3.3 times the true one.
+        assert burst == pytest.approx(101.22, abs=0.001) and after == pytest.approx(101.23, abs=1e-9)
+    finally:
+        d.disconnect()
