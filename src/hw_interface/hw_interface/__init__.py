@@ -14,8 +14,10 @@ Its modules, by role:
   wire format, ``tcp``, how its sockets close, and ``arrival_stamps``, when the controller
   sampled the states it sends without a time), with ``trajectory`` (MoveJ/MoveL time
   parameterisation), ``stream_follower`` (streamed joint targets within the velocity
-  limits) and ``timed_targets`` (the simulation's streamed targets applied at the step
-  scheduled after their arrival, however late the physics thread runs it); the two
+  limits), ``timed_targets`` (the simulation's streamed targets applied at the step
+  scheduled after their arrival, however late the physics thread runs it) and
+  ``timed_path`` (FOLLOW_PATH's timed joint path, checked whole and sampled by the
+  driver's clock); the two
   drivers of real controllers share ``real_controller`` (arming, reconnect backoff, moves
   watched on the measured joints) and ``driver_params`` (the parameters they declare
   alike);
@@ -55,6 +57,7 @@ _PUBLIC = {
     "SimpleMessageDriver": "industrial_driver",
     "JointPath": "trajectory",
     "StreamFollower": "stream_follower",
+    "TimedPath": "timed_path",
     "CommandIndex": "protocol",
     "Result": "protocol",
     "CommandDispatcher": "dispatcher",

@@ -46,6 +46,7 @@ class MotionControllerClient:
         frame_id: str = "",
         stamp=None,
         check: bool = True,
+        times=(),
     ):
         """Send one request; return the response (raise on a non-SUCCESS result if ``check``)."""
         request = commanderRequest(
@@ -53,6 +54,7 @@ class MotionControllerClient:
             position=list(position),
             orientation=list(orientation),
             joints=list(joints),
+            times=list(times),
         )
         request.header.frame_id = frame_id
         if stamp is not None:
@@ -110,6 +112,13 @@ class MotionControllerClient:
     def move_l(self, position, orientation):
         """Straight-line tool move; blocks until done."""
         return self.call(CommandIndex.MOVE_L, position=position, orientation=orientation)
+
+    def follow_path(self, times, joints) -> float:
+        """Send a timed joint path (``times`` s from its start; ``joints`` one row per
+        time); blocks until the robot arrived at its end; return when it started
+        (wall-clock s, on the clock of joint_states' stamps)."""
+        flat = [float(v) for row in joints for v in row]
+        return self.call(CommandIndex.FOLLOW_PATH, joints=flat, times=[float(t) for t in times]).header.stamp.to_sec()
 
     def stop(self):
         """Stop all motion at once."""

@@ -6,7 +6,10 @@ node so it is testable without ROS.
 
 A LATCHED STOP (``latch_stop`` / ``release_stop``) reaches every client at once: the
 robot stops, a blocking move in progress answers INTERRUPTED, and every motion command
-(SET_JOINTS, MOVE_J, MOVE_L) is refused with LATCHED_STOP until it is released.
+(SET_JOINTS, MOVE_J, MOVE_L, FOLLOW_PATH) is refused with LATCHED_STOP until it is released.
+
+FOLLOW_PATH (a timed joint path, hw_interface.timed_path) is checked whole before the
+driver sees it; it blocks as MOVE_J does and shares its BUSY.
 """
 
 import math
@@ -23,6 +26,7 @@ from motion_common.rotations import is_unit_quaternion
 from .errors import HwInterfaceError
 from .protocol import CommandIndex, Result
 from .robot_hw import RobotDriver
+from .timed_path import TimedPath, check_timed_path
 
 
 @dataclass
@@ -48,12 +52,13 @@ class CommandResult:
     position: Sequence[float] = ()
     orientation: Sequence[float] = ()
     robots: Sequence = ()
+    started: float | None = None  # FOLLOW_PATH: when the path started (wall-clock s, the robot's stamps)
 
 
 # s: a streamed target arriving later than this after the previous one starts a new stream,
 # compared with the measured joints (teleop streams at 30-500 Hz; a pause means a new start).
 STREAM_REFERENCE_TIMEOUT = 0.25
-MOTION_COMMANDS = (CommandIndex.SET_JOINTS, CommandIndex.MOVE_J, CommandIndex.MOVE_L)
+MOTION_COMMANDS = (CommandIndex.SET_JOINTS, CommandIndex.MOVE_J, CommandIndex.MOVE_L, CommandIndex.FOLLOW_PATH)
 
 #: How to release a latched stop, for refusal messages.
 RELEASE_HINT = (
@@ -186,8 +191,11 @@ class CommandDispatcher:
             except Exception:  # the first stop already reported; keep the server alive
                 return
 
-    def handle(self, command_index: int, position=(), orientation=(), joints=(), url: str = "") -> CommandResult:
-        """Run one request; never raises, every failure becomes a Result code."""
+    def handle(
+        self, command_index: int, position=(), orientation=(), joints=(), url: str = "", times=()
+    ) -> CommandResult:
+        """Run one request; never raises, every failure becomes a Result code. ``times``:
+        FOLLOW_PATH's sample times (s), ``joints`` then its samples one after another."""
         try:
             command = CommandIndex(command_index)
         except ValueError:
@@ -198,6 +206,7 @@ class CommandDispatcher:
             refusal = self._validate(command, position, orientation, joints)
             if refusal is not None:
                 return self._answer(refusal[0], refusal[1])
+            path = self._check_path(times, joints) if command == CommandIndex.FOLLOW_PATH else None
             if motion:
                 with self._gate:
                     if self._latched:
@@ -211,7 +220,7 @@ class CommandDispatcher:
                     self._in_flight += 1
                     epoch = self._stop_epoch
             try:
-                robots = self._execute(command, position, orientation, joints, url)
+                robots, started = self._execute(command, position, orientation, joints, url, path)
             finally:
                 if motion:
                     with self._gate:
@@ -222,7 +231,9 @@ class CommandDispatcher:
                 # driver said, it did not complete as asked. Stop again, never SUCCESS.
                 stop_driver(self.driver, "a STOP during the command")
                 raise HwInterfaceError(f"{command.name} interrupted by a STOP while it ran", Result.INTERRUPTED)
-            return self._answer(Result.SUCCESS, "", robots)
+            answer = self._answer(Result.SUCCESS, "", robots)
+            answer.started = started
+            return answer
         except HwInterfaceError as exc:
             reason = str(exc)
             if exc.result == Result.INTERRUPTED and self._latched:
@@ -292,6 +303,20 @@ class CommandDispatcher:
                 )
         return None
 
+    def _check_path(self, times, joints) -> TimedPath:
+        """The request's timed path, checked against the driver's limits (raises the refusal)."""
+        limits = self.driver.path_limits()
+        if limits is None:
+            name = self.driver.name or type(self.driver).__name__
+            raise HwInterfaceError(
+                f"FOLLOW_PATH refused: the {name} driver cannot follow a timed path (it declares no path_limits); "
+                "stream the path with SET_JOINTS instead",
+                Result.NOT_SUPPORTED,
+            )
+        if self._limit_lists is None:
+            self._limit_lists = tuple(float_list(limits) for limits in self.driver.joint_limits)
+        return check_timed_path(times, joints, self.driver.joint_names, self._limit_lists, limits[0], limits[1])
+
     def _note_stream(self, target: np.ndarray | None) -> None:
         """Remember the last accepted streamed target (None: the stream was broken off)."""
         with self._stream_lock:
@@ -318,10 +343,11 @@ class CommandDispatcher:
         return None
 
     # -- execution -------------------------------------------------------------------------
-    def _execute(self, command, position, orientation, joints, url):
+    def _execute(self, command, position, orientation, joints, url, path=None):
+        """Run a checked request: (robots for GET_ROBOTS, when a FOLLOW_PATH started)."""
         driver = self.driver
         if command == CommandIndex.GET_ROBOTS:
-            return driver.get_robots()
+            return driver.get_robots(), None
         if command == CommandIndex.LOGIN:
             try:
                 driver.login(url, self._user, self._password)
@@ -335,10 +361,7 @@ class CommandDispatcher:
             driver.get_robot_joints()  # raises NOT_CONNECTED when there is no controller
         elif command == CommandIndex.GET_ROBOT_CARTESIAN_POSITION:
             driver.get_robot_cartesian_position()
-        elif (
-            command in (CommandIndex.SET_JOINTS, CommandIndex.MOVE_J, CommandIndex.MOVE_L)
-            and driver.status().protective_stop
-        ):
+        elif command in MOTION_COMMANDS and driver.status().protective_stop:
             raise HwInterfaceError(
                 "the robot is in a protective stop; clear it, then command again", Result.PROTECTIVE_STOP
             )
@@ -354,7 +377,7 @@ class CommandDispatcher:
             driver.set_digital_output(int(joints[0]), bool(joints[1]))
         elif command in (CommandIndex.MOVE_J, CommandIndex.MOVE_L):
             if not self._blocking_motion.acquire(blocking=False):
-                raise HwInterfaceError("another MOVE_J/MOVE_L is running; wait or send STOP", Result.BUSY)
+                raise HwInterfaceError("another MOVE_J/MOVE_L/FOLLOW_PATH is running; wait or send STOP", Result.BUSY)
             self._note_stream(None)  # a new stream after this move starts from the measured joints
             try:
                 if command == CommandIndex.MOVE_J:
@@ -367,7 +390,26 @@ class CommandDispatcher:
                     )
             finally:
                 self._blocking_motion.release()
-        return ()
+        elif command == CommandIndex.FOLLOW_PATH:
+            if not self._blocking_motion.acquire(blocking=False):
+                raise HwInterfaceError("another MOVE_J/MOVE_L/FOLLOW_PATH is running; wait or send STOP", Result.BUSY)
+            self._note_stream(None)
+            try:
+                current = np.asarray(driver.get_robot_joints(), dtype=float)
+                gap = np.abs(path.start - current)
+                if gap.max() > self.stream_start_tolerance:
+                    name = driver.joint_names[int(np.argmax(gap))]
+                    raise HwInterfaceError(
+                        f"FOLLOW_PATH refused: its first sample is {gap.max():.3f} rad from the measured joints "
+                        f"({name}; limit {self.stream_start_tolerance:.3f}, the server's stream_start_tolerance): "
+                        "a path starts where the robot is (MOVE_J there first)",
+                        Result.TOO_FAR,
+                    )
+                # The move timeout counts from the path's end: a path may be longer than it.
+                return (), driver.follow_path(path, timeout=path.duration + self.move_timeout)
+            finally:
+                self._blocking_motion.release()
+        return (), None
 
     def _answer(self, result: Result, reason: str, robots=()) -> CommandResult:
         answer = CommandResult(result, reason, robots=robots)

@@ -20,6 +20,7 @@ class CommandIndex(enum.IntEnum):
     STOP = 8
     SET_GRIPPER = 9
     SET_DIGITAL_OUTPUT = 10
+    FOLLOW_PATH = 11
 
 
 class Result(enum.IntEnum):
@@ -42,3 +43,4 @@ class Result(enum.IntEnum):
     BAD_ORIENTATION = 14
     INTERRUPTED = 15  # a blocking move cut short: STOP, latched stop, fault, protective stop
     LATCHED_STOP = 16  # refused: a latched stop is active until released
+    NOT_SUPPORTED = 17  # the driver cannot do this command (FOLLOW_PATH on a driver without timed paths)

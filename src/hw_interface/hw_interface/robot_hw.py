@@ -13,6 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import HwInterfaceError
+from .protocol import Result
+
 
 @dataclass
 class DriverStatus:
@@ -95,6 +98,24 @@ class RobotDriver(abc.ABC):
     def move_l(self, position: Sequence[float], orientation: Sequence[float], timeout: float = 30.0) -> None:
         """MoveL: straight-line tool motion with slerped orientation; blocks and answers as
         move_j does."""
+
+    def path_limits(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(joint speed limits rad/s, joint acceleration limits rad/s^2) a FOLLOW_PATH is
+        checked against before it is sent: the limits the driver's streaming enforces.
+        None (this default): the driver cannot follow a timed path (NOT_SUPPORTED)."""
+        return None
+
+    def follow_path(self, path, timeout: float = 30.0) -> float:
+        """FOLLOW_PATH: follow ``path`` (a checked hw_interface.timed_path.TimedPath),
+        sampling it by the driver's own clock in its control loop; block until the MEASURED
+        joints are within the goal tolerance of its end; return when it started (wall-clock
+        s, as joint_sample()'s stamps). Raises as move_j does. This default refuses with
+        NOT_SUPPORTED: a driver that overrides it also overrides path_limits()."""
+        raise HwInterfaceError(
+            f"the {self.name or type(self).__name__} driver cannot follow a timed path (FOLLOW_PATH); "
+            "stream it with SET_JOINTS instead",
+            Result.NOT_SUPPORTED,
+        )
 
     @abc.abstractmethod
     def stop(self, reason: str = "STOP") -> None:

@@ -359,6 +359,77 @@ class URRtdeDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
         if not asynchronous:
             self._watch("moveL", token, before, timeout, lambda q: self._pose_error(q, position, orientation))
 
+    def path_limits(self):
+        """The streamed motion's limits: the URDF joint speeds and stream_acceleration."""
+        velocity = self.kinematics.velocity_limits
+        return velocity, np.full(velocity.shape, self.stream_acceleration)
+
+    def follow_path(self, path, timeout: float = 30.0) -> float:
+        """servoJ the timed path sampled by the driver's clock once per controller period
+        (a late period samples the path at its own time: a stall never bends the path), then
+        its end until the measured joints are within goal_tolerance (settle_time); STOP,
+        a protective stop or a lost connection answer INTERRUPTED within a period."""
+        self._ensure_can_move()
+        with self._lock:
+            if self._active_move is not None:
+                raise HwInterfaceError(f"a {self._active_move} is running; wait or STOP it", Result.BUSY)
+            self._stop_streaming()
+            self._move_token += 1
+            token = self._move_token
+            self._active_move = "path"
+            self._wake.clear()
+            control = self._control
+        start = self._clock()
+        started = time.time()
+        ended_at = None
+        while True:
+            period = control.initPeriod()
+            with self._lock:
+                self._raise_if_stopped("path", token)
+                if self._control is None:
+                    raise self._interrupted("path", token, "the driver disconnected")
+                try:
+                    if self._receive.isProtectiveStopped() or self._receive.isEmergencyStopped():
+                        self._fault = "protective stop during a path"
+                        raise self._interrupted("path", token, "protective or emergency stop")
+                    now = self._clock()
+                    target = path.sample(now - start)
+                    ok = control.servoJ(list(map(float, target)), 0.0, 0.0, self.period, self.lookahead_time, self.gain)
+                    self.servo_periods += 1
+                    if not ok:
+                        self.missed_periods += 1
+                    q = np.array(self._receive.getActualQ(), dtype=float)
+                except HwInterfaceError:
+                    raise
+                except Exception as exc:  # connection lost mid-path: the controller halts the arm
+                    self._fault = f"path lost the controller: {exc}"
+                    raise self._interrupted("path", token, f"connection lost ({exc})") from None
+                if ended_at is None and now - start >= path.duration:
+                    ended_at = now
+                if ended_at is not None:
+                    error = float(np.max(np.abs(q - path.end)))
+                    if error <= self.goal_tolerance:
+                        self._stop_call_servo()
+                        self._end_move(token)
+                        return started
+                    if now - ended_at > self.settle_time:
+                        self._stop_call_servo()
+                        raise self._interrupted(
+                            "path",
+                            token,
+                            f"the arm ended {error:.4f} rad from the path's end (tolerance {self.goal_tolerance:g})",
+                        )
+                elif now - start > timeout:
+                    raise self._timed_out("path", timeout)
+            control.waitPeriod(period)
+
+    def _stop_call_servo(self):
+        """servoStop at a path's end or failure (caller holds the lock)."""
+        try:
+            self._control.servoStop(self.servo_stop_deceleration)
+        except Exception as exc:  # the connection may be gone; nothing moves then
+            self._fault = f"servoStop failed: {exc}"
+
     def stop(self, reason: str = "STOP") -> None:
         """Stop now, from any thread: stopL for a MoveL, stopJ otherwise, servoStop for
         streaming; a blocking move being watched answers INTERRUPTED within one period."""

@@ -45,6 +45,7 @@ def test_srv_fields_are_table_2():
         "float32[] position",
         "float32[] orientation",
         "float32[] joints",
+        "float64[] times",  # FOLLOW_PATH's sample times, beyond Table 2
     ]
     assert fields(response) == [
         "uint8 result",
