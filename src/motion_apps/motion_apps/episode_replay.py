@@ -40,6 +40,16 @@ the actions against the states, ``recorded_lag``) plus ``lead_s``: an arm that t
 stream as the recorded one did is then at each frame's recorded joints at the frame's
 moment, whatever the commands did in between.
 
+``transport="path"``: the same curve, sampled at the stream's steps, goes to the server
+ONCE as a timed joint path (FOLLOW_PATH) that the driver samples by its own clock, with
+the path's velocity fed forward: client or server stalls can no longer bend it, and the
+arm is on the path at the path's times (no servo lag: the recorded joints are sent at
+their frames' moments, the actions that recorded lag late). The tool is measured
+afterwards at the path's start (the server's stamp) plus each frame's time. The gripper
+changes go out meanwhile on ``gripper_client`` (a second connection: the path blocks its
+own). A server whose driver cannot follow a path (NOT_SUPPORTED) gets the stream instead,
+and ``log`` says so.
+
 The lag that matters is the REPLAYING arm's behind its stream, not the recorded one's: with
 ``stream_lag`` (a ``StreamLag`` fed by the caller with the arm's stamped joint samples) the
 stream starts ahead by the recorded lag plus ``lead_s`` and moves, by at most
@@ -48,10 +58,13 @@ of the demo's episodes differ by 2 ms (the recording machine's load), and the on
 below the replaying arm's put the tool 1-1.5 mm behind at every fast frame.
 """
 
+import threading
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from hw_interface.protocol import Result
 
 __all__ = ["EpisodeReplay", "ReplayReport", "LEAD_CHANGE_S"]
 
@@ -73,6 +86,7 @@ class ReplayReport:
     lead_ms: float = 0.0  # how far ahead of the frames the stream ran at the end (ms)
     lead_ms_start: float = 0.0  # ... at the start (the recorded lag plus lead_s)
     lag_measured: bool = False  # the lead came from the replaying arm's measured lag
+    transport: str = "stream"  # what ran: "stream" (SET_JOINTS) or "path" (FOLLOW_PATH)
 
     def add(self, frame: int, error_mm: float) -> None:
         if not self.tool_error_mm or error_mm > max(self.tool_error_mm):
@@ -102,6 +116,7 @@ class ReplayReport:
             "stream_lead_ms": round(self.lead_ms, 2),
             "stream_lead_ms_start": round(self.lead_ms_start, 2),
             "lag_measured": self.lag_measured,
+            "transport": self.transport,
         }
 
 
@@ -118,6 +133,7 @@ class EpisodeReplay:
         sleep=time.sleep,
         settle_s: float = 0.5,
         lead_s: float = 0.0,
+        log=print,
     ):
         self.client = client
         self.period = 1.0 / fps
@@ -126,6 +142,7 @@ class EpisodeReplay:
         self.sleep = sleep
         self.settle_s = settle_s
         self.lead_s = float(lead_s)
+        self.log = log
 
     @staticmethod
     def catmull_rom_tangents(targets: np.ndarray) -> np.ndarray:
@@ -173,6 +190,9 @@ class EpisodeReplay:
         velocities=None,
         through_states: bool = False,
         stream_lag=None,
+        transport: str = "stream",
+        measured_velocities=None,
+        gripper_client=None,
     ) -> ReplayReport:
         """``states`` and ``actions``: joints then gripper per frame; ``tool_poses``: x y z
         qx qy qz qw per frame, as recorded; ``tool_at``: see the module's docstring;
@@ -181,7 +201,15 @@ class EpisodeReplay:
         recorded joints, ahead by the recorded lag (see the module's docstring), and
         ``velocities`` are the measured ones; ``stream_lag``: a ``StreamLag`` the caller
         feeds with the arm's joint samples; the replay tells it each target it sends, and
-        (through the states) runs the stream ahead by the lag it measures."""
+        (through the states) runs the stream ahead by the lag it measures; ``transport``:
+        "stream" or "path" (see the module's docstring; needs ``tool_at``);
+        ``measured_velocities``: the recorded joint velocities (the path through the actions
+        runs their recorded lag late; default ``velocities`` through the states);
+        ``gripper_client``: where the path's gripper changes go (default ``client``)."""
+        if transport not in ("stream", "path"):
+            raise ValueError(f"transport {transport!r}: stream or path")
+        if transport == "path" and tool_at is None:
+            raise ValueError("a replay over a timed path measures the tool afterwards: it needs tool_at")
         if not (len(states) == len(actions) == len(tool_poses)) or len(states) == 0:
             raise ValueError(
                 f"episode arrays differ in length or are empty: {len(states)}, {len(actions)}, {len(tool_poses)}"
@@ -201,14 +229,34 @@ class EpisodeReplay:
             tangents = np.asarray(velocities, dtype=np.float64)[:, :dof] * self.period
             if tangents.shape != joints.shape:
                 raise ValueError(f"velocities of shape {np.shape(velocities)} for {joints.shape} joint targets")
+        steps = (len(actions) - 1) * self.substeps  # the stream's last step: the last frame's targets
+        step_s = self.period / self.substeps
+        if transport == "path":
+            measured = measured_velocities if measured_velocities is not None else velocities
+            # The driver feeds the path's velocity forward: the arm is on it at its times,
+            # so the recorded joints go at their frames' moments and the actions run the
+            # recorded arm's lag behind them late.
+            lag = 0.0 if through_states or measured is None else self.recorded_lag(states, actions, measured)
+            lead_s = self.lead_s - lag
+            report.lead_ms = report.lead_ms_start = 1000.0 * lead_s
+            lead = round(lead_s / step_s, 9)
+            targets = [self._target(joints, tangents, step, lead, steps) for step in range(steps + 1)]
+            try:
+                return self._follow(
+                    report, targets, step_s, lead_s, actions, tool_poses, tool_at, gripper, gripper_client
+                )
+            except Exception as exc:  # noqa: BLE001 - NOT_SUPPORTED falls back, any other refusal is reported
+                if getattr(exc, "result", None) != Result.NOT_SUPPORTED:
+                    report.refused += 1
+                    report.reason = f"path: {exc}"
+                    return report
+                self.log(f"replay_episode: the server cannot follow a timed path ({exc}): streaming SET_JOINTS instead")
         lead_s = self.lead_s + (self.recorded_lag(states, actions, velocities) if through_states else 0.0)
         report.lead_ms = report.lead_ms_start = 1000.0 * lead_s
         follow_lag = stream_lag is not None and through_states
         if follow_lag:
             stream_lag.start_s = lead_s
         pending = []  # (frame, moment its targets were sent) not measured yet (tool_at)
-        steps = (len(actions) - 1) * self.substeps  # the stream's last step: the last frame's targets
-        step_s = self.period / self.substeps
         lead = round(lead_s / step_s, 9)  # the stream runs this many steps (or parts of one) ahead of the frames
         reached = 0  # the next frame whose gripper is still to be set
         start = self.clock()
@@ -230,12 +278,8 @@ class EpisodeReplay:
                     pending = self._measure(pending, tool_at, tool_poses, report)
             else:
                 self._wait_until(start + step * step_s)
-            ahead = min(step + lead, steps)
-            frame = int(ahead // self.substeps)
-            part = (ahead - frame * self.substeps) / self.substeps
-            target = self._curve(joints, tangents, frame, part) if part else joints[frame]
-            if step + lead > steps:  # past the last frame: on along its tangent for the lead's last steps
-                target = joints[-1] + tangents[-1] * ((step + lead - steps) / self.substeps)
+            target = self._target(joints, tangents, step, lead, steps)
+            frame = int(min(step + lead, steps) // self.substeps)
             sent_at = self.clock()
             try:
                 self.client.set_joints([float(v) for v in target])
@@ -254,6 +298,59 @@ class EpisodeReplay:
         report.lead_ms = 1000.0 * lead_s
         report.lag_measured = bool(follow_lag and stream_lag.measuring)
         deadline = self.clock() + 1.0  # the last moments' tool poses are still on their way
+        while pending and self.clock() < deadline:
+            self.sleep(0.02)
+            pending = self._measure(pending, tool_at, tool_poses, report)
+        report.unmeasured = len(pending)
+        return report
+
+    def _target(self, joints, tangents, step, lead, steps) -> np.ndarray:
+        """The curve's target at ``step`` run ``lead`` steps ahead (the first frame's before
+        the start; past the last frame, on along its tangent)."""
+        ahead = min(max(step + lead, 0.0), steps)
+        frame = int(ahead // self.substeps)
+        part = (ahead - frame * self.substeps) / self.substeps
+        target = self._curve(joints, tangents, frame, part) if part else joints[frame]
+        if step + lead > steps:
+            target = joints[-1] + tangents[-1] * ((step + lead - steps) / self.substeps)
+        return target
+
+    def _follow(self, report, targets, step_s, lead_s, actions, tool_poses, tool_at, gripper, gripper_client):
+        """The curve as one timed path; the gripper set meanwhile where the actions change it
+        (when the path reaches their frame); then each frame's tool at the path's start plus
+        the frame's time."""
+        dof = len(targets[0])
+        times = [step * step_s for step in range(len(targets))]
+        outcome = {}
+
+        def follow():
+            try:
+                outcome["started"] = self.client.follow_path(times, [[float(v) for v in t] for t in targets])
+            except Exception as exc:  # noqa: BLE001 - handed to the caller's thread
+                outcome["error"] = exc
+
+        thread = threading.Thread(target=follow, name="replay-path", daemon=True)
+        sent_at = self.clock()
+        thread.start()
+        changes = []
+        for frame in range(1, len(actions)):
+            closed = bool(actions[frame, dof] > 0.5)
+            if closed != gripper:
+                changes.append((max(frame * self.period - lead_s, 0.0), closed))
+                gripper = closed
+        for moment, closed in changes:
+            self._wait_until(sent_at + moment)
+            if not thread.is_alive():
+                break
+            (gripper_client or self.client).set_gripper(closed)
+        thread.join()
+        if "error" in outcome:
+            raise outcome["error"]
+        report.transport = "path"
+        started = outcome["started"]
+        pending = [(i, started + i * self.period) for i in range(1, len(actions))]
+        deadline = self.clock() + 1.0  # the last moments' tool poses are still on their way
+        pending = self._measure(pending, tool_at, tool_poses, report)
         while pending and self.clock() < deadline:
             self.sleep(0.02)
             pending = self._measure(pending, tool_at, tool_poses, report)
