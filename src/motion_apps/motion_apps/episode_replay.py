@@ -340,7 +340,7 @@ class EpisodeReplay:
                 gripper = closed
         for moment, closed in changes:
             self._wait_until(sent_at + moment)
-            if not thread.is_alive():
+            if "error" in outcome:  # refused or cut short: the gripper stays as it is
                 break
             (gripper_client or self.client).set_gripper(closed)
         thread.join()

@@ -378,3 +378,124 @@ def test_a_lag_that_is_no_number_leaves_the_lead_where_it_was():
     summary = report.summary()
     assert summary["compared"] == 9 and summary["stream_lead_ms"] == pytest.approx(10.5, abs=0.3)
     assert len(sent) == 91 and np.all(np.isfinite(sent))
+
+
+class _PathArm(_Arm):
+    """A server whose driver follows a timed path exactly by its own clock: the tool at a
+    moment is the path's sample then (linear between the 100 Hz samples); the path starts
+    ``delay`` s after the call (the server's stamp)."""
+
+    def __init__(self, now, delay=0.013, supported=True):
+        super().__init__()
+        self.now, self.delay, self.supported = now, delay, supported
+        self.paths = []
+
+    def follow_path(self, times, joints):
+        if not self.supported:
+            error = RuntimeError("FOLLOW_PATH refused: NOT_SUPPORTED")
+            error.result = 17
+            raise error
+        self.paths.append((np.asarray(times), np.asarray(joints)))
+        self.started = self.now[0] + self.delay
+        return self.started
+
+    def tool_at(self, moment):
+        times, joints = self.paths[-1]
+        started = self.started
+        return np.array([np.interp(moment - started, times, joints[:, j]) for j in range(joints.shape[1])])
+
+
+def _stalling(now, stall_at=40, stall_s=0.06):
+    """A client's sleep that is held up ``stall_s`` once, at its ``stall_at``-th call."""
+    calls = [0]
+
+    def sleep(seconds):
+        calls[0] += 1
+        now[0] += seconds + (stall_s if calls[0] == stall_at else 0.0)
+
+    return sleep
+
+
+def test_a_replay_over_a_timed_path_is_not_bent_by_a_stalled_client():
+    """Streamed, a client held up 60 ms sends its targets late and the arm that follows them
+    is that far behind; sent as one timed path, the driver samples it by its own clock."""
+    states, actions, velocities, tools = _wiggling_episode(0.012, n=30, wiggle=0.01, speed=0.5, hz=5.0)
+    now = [0.0]
+    arm = _PathArm(now)
+    gripper = _Arm()
+    replay = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=lambda: now[0], sleep=_stalling(now), settle_s=0.0)
+
+    report = replay.run(
+        states,
+        actions,
+        tools,
+        tool_at=arm.tool_at,
+        velocities=velocities,
+        through_states=True,
+        transport="path",
+        gripper_client=gripper,
+    )
+    summary = report.summary()
+    assert summary["transport"] == "path" and len(arm.paths) == 1 and summary["compared"] == len(states) - 1
+    times, joints = arm.paths[0]
+    np.testing.assert_allclose(np.diff(times), 0.01)
+    np.testing.assert_allclose(joints[::10], states[:, :3], atol=1e-9)  # the recorded joints at their frames
+    assert summary["tool_error_mm_max"] < 0.01
+    streamed = _stalled_stream(states, actions, velocities, tools)
+    assert streamed["transport"] == "stream" and streamed["tool_error_mm_max"] > 5.0
+
+
+def _stalled_stream(states, actions, velocities, tools):
+    """The same replay streamed by the stalling client to an arm that follows each target
+    when it arrives."""
+    now, sent = [0.0], []
+    arm = _Arm()
+    arm.set_joints = lambda joints: sent.append((now[0], np.array(joints)))
+
+    def tool_at(moment):
+        if not sent or sent[-1][0] < moment:
+            return None
+        return [p for t, p in sent if t <= moment][-1]
+
+    replay = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=lambda: now[0], sleep=_stalling(now), settle_s=0.0)
+    return replay.run(states, actions, tools, tool_at=tool_at, velocities=velocities, through_states=True).summary()
+
+
+def test_a_path_through_the_actions_runs_the_recorded_lag_late_and_sets_the_gripper_on_the_side():
+    states, actions, tools = _episode()
+    now = [0.0]
+    arm, gripper = _PathArm(now), _Arm()
+    replay = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=lambda: now[0], sleep=_stalling(now), settle_s=0.0)
+    velocities = np.hstack([np.full((20, 1), 0.1 / 19 * 10), np.zeros((20, 2))])  # one frame a frame
+    velocities[-1] = 0.0  # at rest at the last frame, its action
+    report = replay.run(
+        states,
+        actions,
+        tools,
+        tool_at=arm.tool_at,
+        transport="path",
+        measured_velocities=velocities,
+        gripper_client=gripper,
+    )
+    assert report.transport == "path" and report.lead_ms == pytest.approx(-100.0, abs=1.0)  # one frame behind
+    assert report.summary()["tool_error_mm_max"] < 0.01
+    assert gripper.calls == [("gripper", True)] and ("gripper", True) not in arm.calls
+
+
+def test_a_driver_without_timed_paths_gets_the_stream_and_a_refused_path_is_reported():
+    states, actions, tools = _episode()
+    now = [0.0]
+    arm, lines = _PathArm(now, supported=False), []
+    replay = EpisodeReplay(
+        arm, 10.0, stream_rate=10.0, clock=lambda: now[0], sleep=_stalling(now, stall_s=0.0), log=lines.append
+    )
+    report = replay.run(states, actions, tools, tool_at=lambda moment: None, transport="path")
+    assert report.transport == "stream" and arm.sent == 20 and "streaming SET_JOINTS instead" in lines[0]
+    arm = _PathArm(now)
+    arm.follow_path = lambda times, joints: (_ for _ in ()).throw(RuntimeError("FOLLOW_PATH refused: TOO_FAR"))
+    report = EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=_stalling(now, stall_s=0.0)).run(
+        states, actions, tools, tool_at=lambda moment: None, transport="path"
+    )
+    assert report.refused == 1 and report.reason == "path: FOLLOW_PATH refused: TOO_FAR" and arm.sent == 0
+    with pytest.raises(ValueError, match="needs tool_at"):
+        replay.run(states, actions, tools, transport="path")
