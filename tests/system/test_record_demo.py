@@ -50,19 +50,18 @@ def test_record_demo_one_episode(tmp_path):
     # sign error -1, degrees 57.
     assert summary["velocity"]["moving_frames"] > 10, summary["velocity"]
     assert 0.6 < summary["velocity"]["gain"] < 1.5, summary["velocity"]
-    # The goal is 2 mm at every frame (docs/benchmarks.md). The replay streams the recorded
-    # joint path ahead by the replaying arm's lag, measured as it runs: with one core kept
-    # busy p95 0.10-0.33 mm, max 0.8-1.7 mm in 11 of 13 replays, but a client or server
-    # held up for 10-90 ms puts single frames at 3-4 mm (and tens of mm when other jobs
-    # load the machine as well), so the worst is bounded at 5 mm here (a teleporting palm in
-    # the teaching stream gave 7 mm, a first frame made from values seconds old 60-70 mm),
-    # not at the goal. Through the 10 Hz actions p95 was 0.9-1.4 mm. The p95 is bounded at
-    # half the goal: CI, with a core kept busy, gave 0.71 mm once.
+    # The goal is 2 mm at every frame (docs/benchmarks.md). The replay sends the recorded
+    # joint path once as a timed path the simulated arm samples by its own clock
+    # (FOLLOW_PATH), so neither a client nor a server held up can bend it: with one core
+    # kept busy max 0.09-0.20 mm, p95 0.02-0.03 mm. Streamed (as before), a client or
+    # server held up for 10-90 ms put single frames at 3-4 mm. The worst is still bounded
+    # at 5 mm here (a teleporting palm in the teaching stream gave 7 mm, a first frame made
+    # from values seconds old 60-70 mm), the p95 at half the goal.
     # A recorder held up on a loaded machine no longer skips a frame (which put the next
     # one a period off its instant), and none may be skipped here.
     replay = summary["replay"]
     assert replay["curve"] == "state", replay
-    assert replay["lag_measured"], replay  # the lead followed the replaying arm's own lag
+    assert replay["transport"] == "path", replay  # the driver followed the whole path by its clock
     assert replay["tool_error_mm_p95"] < 1.0, replay
     assert replay["tool_error_mm_max"] < 5.0, replay
     with open(run / "record_demo.png", "rb") as stream:
