@@ -50,7 +50,7 @@ SERVER_PARAMETERS = ParamSchema(
             0.05,
             "rad",
             "the first SET_JOINTS of a stream (after a start, STOP, move or pause) must lie this close to the measured "
-            "joints: a stale stream from before a restart is refused",
+            "joints: a stale stream from before a restart is refused; so must a FOLLOW_PATH's first sample",
             low=0.0,
             high=3.2,
             low_open=True,
@@ -59,7 +59,8 @@ SERVER_PARAMETERS = ParamSchema(
             "move_timeout",
             60.0,
             "s",
-            "longest a MOVE_J/MOVE_L may run before the robot is stopped and TIMEOUT answered",
+            "longest a MOVE_J/MOVE_L (a FOLLOW_PATH: beyond its duration) may run before the robot is stopped and "
+            "TIMEOUT answered",
             low=0.0,
             high=3600.0,
             low_open=True,
