@@ -20,7 +20,7 @@ The session checks need the --check flag of scripts/run_session (scripts/preflig
 until it exists they are expected failures.
 """
 
-import functools
+import concurrent.futures
 import glob
 import os
 import re
@@ -116,9 +116,8 @@ def runnable(command):
     return None, "not a --help, --check, session or generator form"
 
 
-@functools.cache
-def run(shell):
-    """Exit code and output tail of one shell line (each distinct line runs once)."""
+def run_one(shell):
+    """Exit code and output tail of one shell line."""
     result = subprocess.run(
         ["bash", "-c", f"source catkin_ws/devel/setup.bash && {shell}"],
         cwd=ROOT,
@@ -131,8 +130,29 @@ def run(shell):
     return result.returncode, (result.stdout + result.stderr)[-3000:]
 
 
+# Each command is a process that mostly starts Python and checks files (2-3 s): the ones the
+# collected tests need run a few at a time, once each, and each test waits for its own.
+WORKERS = 3
+
+
+@pytest.fixture(scope="session")
+def docs_runs(request):
+    """Futures of (exit code, output tail) by shell line, for the collected tests' commands."""
+    shells = []
+    for item in request.session.items:
+        if getattr(item, "originalname", "") == "test_docs_command_runs":
+            shell, _ = runnable(item.callspec.params["command"])
+            if shell is not None and shell not in shells:
+                shells.append(shell)
+    # The session scripts run scripts/setup first: once here, so that none of them, running
+    # side by side, finds work to do (a build) that another is doing.
+    subprocess.run(["scripts/setup"], cwd=ROOT, stdin=subprocess.DEVNULL, capture_output=True, timeout=1800)
+    with concurrent.futures.ThreadPoolExecutor(max_workers=WORKERS) as pool:
+        yield {shell: pool.submit(run_one, shell) for shell in shells}
+
+
 @pytest.mark.parametrize("place,command", ALL_COMMANDS, ids=[place for place, _ in ALL_COMMANDS])
-def test_docs_command_runs(place, command):
+def test_docs_command_runs(place, command, docs_runs):
     shell, needs_check = runnable(command)
     if shell is None and needs_check == "the suite itself":
         with open(os.path.join(ROOT, "scripts", "test"), encoding="utf-8") as stream:
@@ -144,7 +164,7 @@ def test_docs_command_runs(place, command):
     )
     if needs_check and not _has_check("scripts/run_session"):
         pytest.xfail("scripts/run_session has no --check yet: the session check cannot run")
-    code, output = run(shell)
+    code, output = docs_runs[shell].result() if shell in docs_runs else run_one(shell)
     assert code == 0, f"{place}: `{shell}` exited {code}:\n{output}"
 
 
