@@ -15,7 +15,9 @@ import pytest
 import hw_interface.sim_driver as sim_module
 from hw_interface.dispatcher import CommandDispatcher
 from hw_interface.errors import HwInterfaceError
+from hw_interface.industrial_driver import SimpleMessageDriver
 from hw_interface.protocol import CommandIndex, Result
+from hw_interface.robot_hw import RobotDriver
 from hw_interface.sim_driver import PybulletSimDriver
 from hw_interface.testing.fake_rtde import FakeUR
 from hw_interface.timed_path import MAX_PATH_SAMPLES, TimedPath, check_timed_path
@@ -159,6 +161,9 @@ def test_a_driver_without_timed_paths_answers_not_supported():
         super(PybulletSimDriver, driver).follow_path(None)  # RobotDriver's default
     assert err.value.result == Result.NOT_SUPPORTED
     driver.disconnect()
+    # The ROS-Industrial driver keeps the defaults (docs/drivers.md says so).
+    assert SimpleMessageDriver.path_limits is RobotDriver.path_limits
+    assert SimpleMessageDriver.follow_path is RobotDriver.follow_path
 
 
 def test_the_curve_never_overshoots_a_sample_and_rests_at_both_ends():
