@@ -187,9 +187,12 @@ def test_velocity_agreement_tells_recorded_velocities_from_missing_ones():
     assert missing["gain"] == 0.0
 
 
-def _lagging_replay(states, actions, tools, lag, velocities=None, lead_s=0.0, through_states=False) -> dict:
+def _lagging_replay(
+    states, actions, tools, lag, velocities=None, lead_s=0.0, through_states=False, stall_s=0.0, hold=False
+) -> dict:
     """The replay's summary against an arm whose tool follows the targets' path ``lag`` s
-    late (linear between the targets sent), on a simulated clock."""
+    late (linear between the targets sent; ``hold``: each target until the next), on a
+    simulated clock (the client held up ``stall_s`` once, see _stalling)."""
     now, sent = [0.0], []
     arm = _Arm()
     arm.set_joints = lambda joints: sent.append((now[0], np.array(joints)))
@@ -200,9 +203,9 @@ def _lagging_replay(states, actions, tools, lag, velocities=None, lead_s=0.0, th
         moment -= lag
         k = max([i for i, (stamp, _) in enumerate(sent) if stamp <= moment], default=0)
         (t0, p0), (t1, p1) = sent[k], sent[min(k + 1, len(sent) - 1)]
-        return p0 + (p1 - p0) * ((moment - t0) / (t1 - t0) if t1 > t0 else 0.0)
+        return p0 if hold else p0 + (p1 - p0) * ((moment - t0) / (t1 - t0) if t1 > t0 else 0.0)
 
-    clock, sleep = (lambda: now[0]), (lambda s: now.__setitem__(0, now[0] + s))
+    clock, sleep = (lambda: now[0]), _stalling(now, stall_s=stall_s)
     run = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=clock, sleep=sleep, settle_s=0.0, lead_s=lead_s)
     return run.run(
         states, actions, tools, tool_at=tool_at, velocities=velocities, through_states=through_states
@@ -441,24 +444,8 @@ def test_a_replay_over_a_timed_path_is_not_bent_by_a_stalled_client():
     np.testing.assert_allclose(np.diff(times), 0.01)
     np.testing.assert_allclose(joints[::10], states[:, :3], atol=1e-9)  # the recorded joints at their frames
     assert summary["tool_error_mm_max"] < 0.01
-    streamed = _stalled_stream(states, actions, velocities, tools)
+    streamed = _lagging_replay(states, actions, tools, 0.012, velocities, through_states=True, stall_s=0.06, hold=True)
     assert streamed["transport"] == "stream" and streamed["tool_error_mm_max"] > 5.0
-
-
-def _stalled_stream(states, actions, velocities, tools):
-    """The same replay streamed by the stalling client to an arm that follows each target
-    when it arrives."""
-    now, sent = [0.0], []
-    arm = _Arm()
-    arm.set_joints = lambda joints: sent.append((now[0], np.array(joints)))
-
-    def tool_at(moment):
-        if not sent or sent[-1][0] < moment:
-            return None
-        return [p for t, p in sent if t <= moment][-1]
-
-    replay = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=lambda: now[0], sleep=_stalling(now), settle_s=0.0)
-    return replay.run(states, actions, tools, tool_at=tool_at, velocities=velocities, through_states=True).summary()
 
 
 def test_a_path_through_the_actions_runs_the_recorded_lag_late_and_sets_the_gripper_on_the_side():
