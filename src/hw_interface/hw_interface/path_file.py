@@ -1,0 +1,82 @@
+"""A timed joint path read from a file for FOLLOW_PATH (``motion_controller_client
+follow_path FILE``): one row per sample, its time (s) then the robot's joints (rad).
+
+Plain Python, no ROS. A CSV (comma-separated, ``#`` comments, an optional header line) or
+a NumPy ``.npy`` array of shape (samples, 1 + joints). Times count from the first row's:
+a file exported with absolute stamps is sent as it is. The file's form is checked here,
+each refusal naming the file and the row, before anything is sent; the server still checks
+the path against the robot (limits, speed, where the arm is).
+"""
+
+import os
+
+import numpy as np
+
+from .timed_path import MAX_PATH_SAMPLES
+
+__all__ = ["read_path_file", "check_path_dof"]
+
+
+def _load(filename: str) -> np.ndarray:
+    if filename.lower().endswith(".npy"):
+        try:
+            return np.load(filename, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise ValueError(f"{filename}: not a NumPy .npy array of numbers ({exc})") from None
+    with open(filename, encoding="utf-8") as stream:
+        lines = [(number, line.split("#", 1)[0].strip()) for number, line in enumerate(stream, 1)]
+    lines = [(number, text) for number, text in lines if text]
+    if lines:
+        try:
+            [float(v) for v in lines[0][1].split(",")]
+        except ValueError:
+            lines = lines[1:]  # a header line (time, joint names)
+    rows = []
+    for number, text in lines:
+        try:
+            rows.append([float(v) for v in text.split(",")])
+        except ValueError:
+            raise ValueError(f"{filename}:{number}: not comma-separated numbers: {text[:80]!r}") from None
+        if len(rows[-1]) != len(rows[0]):
+            raise ValueError(f"{filename}:{number}: {len(rows[-1])} columns where the first row has {len(rows[0])}")
+    return np.array(rows, dtype=np.float64)
+
+
+def read_path_file(filename: str) -> tuple[np.ndarray, np.ndarray]:
+    """(times from 0 (n), joints (n x dof)) of a path file, or ValueError naming the file
+    and the row: at least 2 rows of at least 2 columns, at most MAX_PATH_SAMPLES rows,
+    every value finite, times strictly increasing."""
+    if not os.path.isfile(filename):
+        raise ValueError(f"{filename}: no such file")
+    table = _load(filename)
+    if table.dtype.kind not in "fiu":
+        raise ValueError(f"{filename}: holds {table.dtype}, not numbers")
+    table = np.asarray(table, dtype=np.float64)
+    if table.ndim != 2 or table.shape[0] < 2 or table.shape[1] < 2:
+        raise ValueError(
+            f"{filename}: a path is at least 2 rows of time + joints, got shape {table.shape} "
+            "(one row per sample: time in s, then each joint in rad)"
+        )
+    if table.shape[0] > MAX_PATH_SAMPLES:
+        raise ValueError(f"{filename}: {table.shape[0]} rows: a path holds at most {MAX_PATH_SAMPLES}; split it")
+    bad = np.flatnonzero(~np.all(np.isfinite(table), axis=1))
+    if bad.size:
+        raise ValueError(f"{filename}: row {bad[0] + 1} has a value that is no number: {table[bad[0]].tolist()}")
+    times = table[:, 0] - table[0, 0]
+    bad = np.flatnonzero(np.diff(times) <= 0.0)
+    if bad.size:
+        row = bad[0] + 2
+        raise ValueError(
+            f"{filename}: row {row}'s time {table[row - 1, 0]:g} s does not come after row {row - 1}'s "
+            f"{table[row - 2, 0]:g} s (times must increase strictly)"
+        )
+    return times, table[:, 1:].copy()
+
+
+def check_path_dof(filename: str, joints: np.ndarray, dof: int) -> None:
+    """ValueError unless the path's rows hold ``dof`` joints (the robot's)."""
+    if joints.shape[1] != dof:
+        raise ValueError(
+            f"{filename}: {joints.shape[1]} joint columns after the time, the robot has {dof} joints "
+            f"(each row: time, then {dof} joints in the robot's order)"
+        )
