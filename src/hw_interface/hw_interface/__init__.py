@@ -28,6 +28,8 @@ Its modules, by role:
 - ``controller_client``: ``MotionControllerClient``, the Python client of
   /motion_controller; a ROS edge (rospy and the generated ``motion_commander/commander``
   service);
+- ``path_file``: a timed joint path read and checked from a CSV or ``.npy`` file, for
+  ``motion_controller_client follow_path``;
 - ``errors``: ``HwInterfaceError``;
 - ``testing``: test doubles (the fake UR controller, the simulated simple_message
   controller), injected by registry name and
