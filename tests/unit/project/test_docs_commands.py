@@ -146,7 +146,10 @@ def docs_runs(request):
                 shells.append(shell)
     # The session scripts run scripts/setup first: once here, so that none of them, running
     # side by side, finds work to do (a build) that another is doing.
-    subprocess.run(["scripts/setup"], cwd=ROOT, stdin=subprocess.DEVNULL, capture_output=True, timeout=1800)
+    setup = subprocess.run(
+        ["scripts/setup"], cwd=ROOT, stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=1800
+    )
+    assert setup.returncode == 0, f"scripts/setup exited {setup.returncode}:\n{(setup.stdout + setup.stderr)[-3000:]}"
     with concurrent.futures.ThreadPoolExecutor(max_workers=WORKERS) as pool:
         yield {shell: pool.submit(run_one, shell) for shell in shells}
 
