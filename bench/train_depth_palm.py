@@ -6,7 +6,12 @@ Data, on the TUNING subjects only of the depth hand bench's split (bench/shrec_h
 ``--per-subject`` SHREC'17 training sequences of each tuning subject (the bench's own two
 among them), seeded, rendered by motion_sensor.testing.skeleton_depth with its sensor noise;
 and ``--synthetic`` paths of the parametric hand (motion_sensor.testing.synthetic_depth,
-path seeds 101.., none the bench's seed 1), so the network is not fitted to one renderer.
+path seeds 101.., none the bench's seed 1), so the network is not fitted to one renderer;
+and ``--varied`` more renders of each of those tuning sequences on a varied hand
+(motion_sensor.testing.varied_hands: bone lengths, capsule radii, palm slab, thenar and
+forearm drawn per sequence, the whole sequence turned so its palm is 0-90 degrees from the
+line of sight, rolled and placed at 0.6-1.0 m; seeded, drawn after the rest), so the network
+sees more hands than the ten subjects' and tilted palms as often as facing ones.
 Each frame is tracked as the tracker runs (reset per sequence), and the crop around its
 estimate is kept with the true palm centre (SHREC's joint 1; the synthetic hand's palm
 centre). The network: three 3x3 convolution blocks (16, 32, 64 channels, each halving the
@@ -15,12 +20,17 @@ crops shifted and their reference depth moved (see ``batch``), seeded. ``--membe
 networks (seeds seed, seed + 1, ..) are exported as one, which averages them on the crop and
 its mirror image. Nothing of SHREC'17 is written beside the model beyond the weights.
 
-``--validate-subjects 2,4,..`` trains without those tuning subjects and prints, on their
-bench sequences, the tracker's per-sequence aligned palm RMS with and without the
-correction (how the settings were chosen); no model is written then.
+``--validate-subjects 2,4,..`` trains without those tuning subjects (their varied renders
+too) and prints, on their bench sequences, the tracker's per-sequence aligned palm RMS with
+and without the correction (how the settings were chosen; also at other weights), and on
+all their unvaried and their varied sequences; no model is written then.
 
-Run: nice -n 10 bench/run train_depth_palm [--per-subject 16] [--synthetic 6] [--epochs 30]
-[--cache FILE] [--validate-subjects LIST]. Single-threaded; about 8 min (6 rendering and tracking).
+Run: nice -n 10 bench/run train_depth_palm [--per-subject 16] [--synthetic 6] [--varied 2]
+[--epochs 30] [--cache FILE] [--validate-subjects LIST]. Single-threaded; about 8 min (6
+rendering and tracking, 12675 frames). ``--varied 2`` triples the frames (34418): about 13
+min of CPU rendering and tracking and 9 s of CPU an epoch per 17000 training frames (some 18
+min for two networks on all of them); ``--cache`` keeps the tracked frames for further runs
+(a cache of more varied copies serves a run that asks for fewer).
 """
 
 import argparse
@@ -54,6 +64,7 @@ from motion_sensor.devices.depth_palm_model import (  # noqa: E402
 from motion_sensor.testing.skeleton_depth import PALM, render_skeleton  # noqa: E402
 from motion_sensor.testing.synthetic_depth import DEFAULT_INTRINSICS as INTR  # noqa: E402
 from motion_sensor.testing.synthetic_depth import hand_path, render_hand  # noqa: E402
+from motion_sensor.testing.varied_hands import vary_sequence  # noqa: E402
 
 TRACKER = TRACKER_PARAMS.defaults()
 OUT = os.path.join(ROOT, "src", "motion_sensor", "data")
@@ -125,7 +136,7 @@ def collect(args):
         frames = (roundtrip(render_skeleton(j, INTR, rng=noise)) for j in joints)
         before = len(rows)
         track_frames(frames, joints[:, PALM], rows, number)
-        meta += [(number, int(data["subject"][index]), index in bench)] * (len(rows) - before)
+        meta += [(number, int(data["subject"][index]), index in bench, 0)] * (len(rows) - before)
         if number % 10 == 9:
             print(f"  {number + 1}/{len(chosen)} sequences, {len(rows)} frames, {time.perf_counter() - start:.0f} s")
     for k in range(args.synthetic):
@@ -133,7 +144,20 @@ def collect(args):
         frames = (roundtrip(render_hand(p, noise_per_m2=SYNTHETIC_NOISE, rng=noise)) for p in poses)
         before = len(rows)
         track_frames(frames, [p.position for p in poses], rows, len(chosen) + k)
-        meta += [(len(chosen) + k, 0, False)] * (len(rows) - before)
+        meta += [(len(chosen) + k, 0, False, 0)] * (len(rows) - before)
+    # The same tuning sequences again on varied hands, turned and placed (drawn after the
+    # above, from a generator of their own: the unvaried frames are those of --varied 0).
+    varied = np.random.default_rng(args.seed + 2)
+    number = len(chosen) + args.synthetic
+    for copy in range(1, args.varied + 1):
+        for index in chosen:
+            joints, model = vary_sequence(data["joints"][offsets[index] : offsets[index + 1]], varied)
+            frames = (roundtrip(render_skeleton(j, INTR, model, rng=noise)) for j in joints)
+            before = len(rows)
+            track_frames(frames, joints[:, PALM], rows, number)
+            meta += [(number, int(data["subject"][index]), False, copy)] * (len(rows) - before)
+            number += 1
+        print(f"  varied copy {copy}/{args.varied}: {len(rows)} frames, {time.perf_counter() - start:.0f} s")
     print(f"  {len(rows)} frames in {time.perf_counter() - start:.0f} s")
     meta = np.array(meta)
     return {
@@ -144,6 +168,7 @@ def collect(args):
         "sequence": meta[:, 0],
         "subject": meta[:, 1],
         "bench": meta[:, 2].astype(bool),
+        "variant": meta[:, 3],
         "sequences": np.array(chosen),
     }
 
@@ -253,6 +278,37 @@ def aligned_rms_mm(seen, truth, sequence):
     return figures["rms_mm"], figures["p95_mm"]
 
 
+def validate(net, frames, left, left_out, args):
+    """Prints the left-out subjects' per-sequence aligned RMS / p95 without and with the
+    correction: on their bench sequences (what the settings are chosen on; also at other
+    weights), on all their unvaried sequences, and on their varied-hand ones."""
+    parts = (
+        ("their bench sequences", left & frames["bench"]),
+        ("all their unvaried sequences", left & (frames["subject"] > 0) & (frames["variant"] == 0)),
+        ("their varied-hand sequences", left & (frames["variant"] > 0)),
+    )
+    for name, rows in parts:
+        if not rows.any():
+            continue
+        crops, _ = batch(frames["crop"][rows], frames["origin"][rows], frames["truth"][rows], None, 0, 0.0, 0.0)
+        offset = predict(net, crops)
+        seq, truth, estimate = frames["sequence"][rows], frames["truth"][rows], frames["estimate"][rows]
+        before = aligned_rms_mm(estimate, truth, seq)
+        palm, fell_back = corrected(estimate, frames["origin"][rows], offset, args.max_offset, args.weight)
+        after = aligned_rms_mm(palm, truth, seq)
+        print(
+            f"left-out subjects {left_out}, {name} ({rows.sum()} frames): per-sequence RMS / p95 "
+            f"{before[0]:.2f} / {before[1]:.2f} mm without the model, {after[0]:.2f} / {after[1]:.2f} mm with it "
+            f"({100 * float(fell_back.mean()):.1f} % of frames fell back)"
+        )
+        if name == "their bench sequences":
+            others = []
+            for weight in (0.6, 0.7, 0.8, 0.9, 1.0):
+                palm, _ = corrected(estimate, frames["origin"][rows], offset, args.max_offset, weight)
+                others.append(f"{weight}: {aligned_rms_mm(palm, truth, seq)[0]:.2f}")
+            print(f"  at other weights, RMS mm: {', '.join(others)}")
+
+
 def export(net, path):
     import torch
 
@@ -273,6 +329,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--per-subject", type=int, default=16, help="SHREC sequences per tuning subject")
     parser.add_argument("--synthetic", type=int, default=6, help="synthetic hand paths of 300 frames")
+    parser.add_argument(
+        "--varied", type=int, default=0, help="varied-hand copies of each tuning sequence (testing.varied_hands)"
+    )
     parser.add_argument("--epochs", type=int, default=30)
     parser.add_argument("--batch", type=int, default=128)
     parser.add_argument("--lr", type=float, default=3e-3)
@@ -300,6 +359,10 @@ def main():
         frames = collect(args)
         if args.cache:
             np.savez(args.cache, **frames)
+    # A cache may hold more varied copies than asked for: those are left out.
+    frames.setdefault("variant", np.zeros(len(frames["truth"]), int))
+    keep = frames["variant"] <= args.varied
+    frames = {k: (v[keep] if k != "sequences" else v) for k, v in frames.items()}
     count = len(frames["truth"])
     train_rows = np.ones(count, bool)
     if args.validate_subjects:
@@ -314,21 +377,7 @@ def main():
         )
     net = averaged(members)
     if args.validate_subjects:
-        rows = ~train_rows & frames["bench"]
-        crops, _ = batch(frames["crop"][rows], frames["origin"][rows], frames["truth"][rows], None, 0, 0.0, 0.0)
-        offset = predict(net, crops)
-        palm, fell_back = corrected(
-            frames["estimate"][rows], frames["origin"][rows], offset, args.max_offset, args.weight
-        )
-        fallback = float(fell_back.mean())
-        seq, truth = frames["sequence"][rows], frames["truth"][rows]
-        before = aligned_rms_mm(frames["estimate"][rows], truth, seq)
-        after = aligned_rms_mm(palm, truth, seq)
-        print(
-            f"left-out subjects {left_out}, their bench sequences ({rows.sum()} frames): per-sequence RMS / p95 "
-            f"{before[0]:.2f} / {before[1]:.2f} mm without the model, {after[0]:.2f} / {after[1]:.2f} mm with it "
-            f"({100 * fallback:.1f} % of frames fell back)"
-        )
+        validate(net, frames, ~train_rows, left_out, args)
         return 0
     os.makedirs(args.out, exist_ok=True)
     model = os.path.join(args.out, "depth_palm.onnx")
@@ -342,10 +391,12 @@ def main():
             "shrec17_subjects": sorted({int(s) for s in frames["subject"] if s}),
             "shrec17_sequences": [int(i) for i in frames["sequences"]],
             "synthetic_paths": args.synthetic,
+            "varied_copies": args.varied,
             "frames": int(count),
         },
         "settings": {
-            k: getattr(args, k) for k in ("per_subject", "epochs", "batch", "lr", "seed", "shift", "depth_jitter")
+            k: getattr(args, k)
+            for k in ("per_subject", "varied", "epochs", "batch", "lr", "seed", "shift", "depth_jitter")
         },
     }
     write_atomic(os.path.join(args.out, "depth_palm.json"), json.dumps(info, indent=2) + "\n")
