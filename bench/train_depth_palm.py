@@ -27,10 +27,10 @@ all their unvaried and their varied sequences; no model is written then.
 
 Run: nice -n 10 bench/run train_depth_palm [--per-subject 16] [--synthetic 6] [--varied 2]
 [--epochs 30] [--cache FILE] [--validate-subjects LIST]. Single-threaded; about 8 min (6
-rendering and tracking, 12675 frames). ``--varied 2`` triples the frames (34418): about 13
-min of CPU rendering and tracking and 9 s of CPU an epoch per 17000 training frames (some 18
-min for two networks on all of them); ``--cache`` keeps the tracked frames for further runs
-(a cache of more varied copies serves a run that asks for fewer).
+rendering and tracking, 12675 frames). ``--varied 2`` nearly triples the frames (34418): 18
+min rendering and tracking on a shared machine and about 9 s of CPU an epoch per 17000
+training frames (some 18 min for two networks on all of them); ``--cache`` keeps the tracked
+frames for further runs (a cache of more varied copies serves a run that asks for fewer).
 """
 
 import argparse
