@@ -26,7 +26,7 @@ from motion_common.rotations import is_unit_quaternion
 from .errors import HwInterfaceError
 from .protocol import CommandIndex, Result
 from .robot_hw import RobotDriver
-from .timed_path import TimedPath, check_timed_path
+from .timed_path import TimedPath, check_path_start, check_timed_path
 
 
 @dataclass
@@ -405,6 +405,8 @@ class CommandDispatcher:
                         "a path starts where the robot is (MOVE_J there first)",
                         Result.TOO_FAR,
                     )
+                # The first command is where the arm is: the path eases onto its first sample.
+                check_path_start(path, current, driver.joint_names, *driver.path_limits())
                 # The move timeout counts from the path's end: a path may be longer than it.
                 return (), driver.follow_path(path, timeout=path.duration + self.move_timeout)
             finally:

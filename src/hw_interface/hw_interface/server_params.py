@@ -59,8 +59,8 @@ SERVER_PARAMETERS = ParamSchema(
             "move_timeout",
             60.0,
             "s",
-            "longest a MOVE_J/MOVE_L (a FOLLOW_PATH: beyond its duration) may run before the robot is stopped and "
-            "TIMEOUT answered",
+            "longest a MOVE_J/MOVE_L may run before the robot is stopped and TIMEOUT answered (a FOLLOW_PATH: "
+            "beyond its duration; a path that ends away from its goal is answered by the driver first)",
             low=0.0,
             high=3600.0,
             low_open=True,

@@ -273,7 +273,9 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
         self._step_cache = {}
         self._target = self._initial.copy()
         self._follower.reset(self._initial)
-        # Nothing streamed to an earlier session may move this one.
+        # Nothing streamed to, or moving, an earlier session may move this one.
+        if self._path is not None:
+            self._end_path((Result.INTERRUPTED, "a new LOGIN reset the simulation; the move did not arrive"))
         self._timed_targets.clear()
         self._last_stream = None
         self.bodies = load_scene(self._client, self.scene_spec)
@@ -287,6 +289,8 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             self._thread.join(timeout=2.0)
             self._thread = None
         with self._lock:
+            if self._path is not None:  # a move of this simulation never goes on in the next
+                self._end_path((Result.INTERRUPTED, "the simulation was disconnected; the move did not arrive"))
             if self._client is not None:
                 self._client.disconnect()
                 self._client = None
@@ -546,7 +550,12 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
             self._path_started = None
             self._path_outcome = None
             self._path_done.clear()
-        if not self._path_done.wait(timeout=max(timeout, 0.0)):
+        try:
+            arrived = self._path_done.wait(timeout=max(timeout, 0.0))
+        except BaseException:  # the path must not go on moving the arm for nobody
+            self.stop(reason="an error while the move ran")
+            raise
+        if not arrived:
             self.stop(reason="timeout")
             raise HwInterfaceError(f"motion did not finish within {timeout:.1f} s; stopped", Result.TIMEOUT)
         with self._lock:

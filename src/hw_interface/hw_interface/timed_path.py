@@ -22,11 +22,17 @@ from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
 from .errors import HwInterfaceError
 from .protocol import Result
 
-__all__ = ["TimedPath", "check_timed_path", "MAX_PATH_SAMPLES"]
+__all__ = ["TimedPath", "check_timed_path", "check_path_start", "MAX_PATH_SAMPLES", "MAX_PATH_DURATION", "START_BLEND"]
 
 #: Most samples one path may hold: 10 minutes at 100 Hz (6 joints: 360000 float32 on the
 #: wire, ~1.4 MB). Longer demonstrations are sent in several paths.
 MAX_PATH_SAMPLES = 60000
+#: s: the longest path (times in milliseconds by mistake would otherwise pass as a path a
+#: thousand times slower, blocking the robot for hours).
+MAX_PATH_DURATION = 3600.0
+#: s: a path eases from the measured joints onto its first sample over this time (a
+#: smoothstep), so its first command is where the arm is, never a step.
+START_BLEND = 0.25
 
 
 class TimedPath:
@@ -40,6 +46,25 @@ class TimedPath:
         slopes[0] = slopes[-1] = 0.0
         self._curve = CubicHermiteSpline(self.times, self.joints, slopes, axis=0)
         self._speed = self._curve.derivative()
+        self._offset = np.zeros(self.joints.shape[1])  # measured joints - first sample
+        self._blend = 0.0
+
+    def start_from(self, measured, blend: float = START_BLEND) -> tuple[np.ndarray, np.ndarray]:
+        """Begin at the ``measured`` joints instead of the first sample, easing onto the
+        path over its first ``blend`` s (at most its duration) with a smoothstep (C1, no
+        speed step); return the (speed, acceleration) that the easing adds at most, per
+        joint (1.5 and 6 times the gap over blend and blend squared)."""
+        self._offset = np.asarray(measured, dtype=np.float64) - self.joints[0]
+        self._blend = min(float(blend), self.duration)
+        gap = np.abs(self._offset)
+        return gap * 1.5 / self._blend, gap * 6.0 / self._blend**2
+
+    def _easing(self, t: float) -> tuple[float, float]:
+        """(weight of the start offset, its rate per s) at ``t``."""
+        if self._blend <= 0.0 or t >= self._blend:
+            return 0.0, 0.0
+        x = max(t, 0.0) / self._blend
+        return 1.0 - x * x * (3.0 - 2.0 * x), -6.0 * x * (1.0 - x) / self._blend
 
     @property
     def duration(self) -> float:
@@ -57,14 +82,17 @@ class TimedPath:
         return self.joints[-1].copy()
 
     def sample(self, t: float) -> np.ndarray:
-        """Joint target at ``t`` s from the start (the first sample before, the last after)."""
-        return self._curve(min(max(float(t), 0.0), self.duration))
+        """Joint target at ``t`` s from the start (the start before, the last sample after)."""
+        t = float(t)
+        weight, _ = self._easing(t)
+        return self._curve(min(max(t, 0.0), self.duration)) + weight * self._offset
 
     def velocity(self, t: float) -> np.ndarray:
         """Joint velocity (rad/s) of the curve at ``t`` (0 outside the path)."""
         if not 0.0 < t < self.duration:
             return np.zeros(self.joints.shape[1])
-        return self._speed(float(t))
+        _, rate = self._easing(float(t))
+        return self._speed(float(t)) + rate * self._offset
 
     def peaks(self) -> tuple[np.ndarray, np.ndarray]:
         """(largest |speed|, largest |acceleration|) of each interval and joint, (n-1) x dof:
@@ -124,6 +152,11 @@ def check_timed_path(
     if bad.size:
         i = bad[0] + 1
         _refuse(Result.WRONG_LENGTH, f"times must increase strictly: sample {i} at {t[i]:g} s after {t[i - 1]:g} s")
+    if t[-1] > MAX_PATH_DURATION:
+        _refuse(
+            Result.WRONG_LENGTH,
+            f"the path lasts {t[-1]:g} s, over the {MAX_PATH_DURATION:g} s a path may (times are in seconds)",
+        )
     lower, upper = (np.asarray(v, dtype=np.float64) for v in limits)
     outside = (q < lower) | (q > upper)
     if outside.any():
@@ -150,3 +183,28 @@ def check_timed_path(
                 "a cubic with PCHIP slopes, at rest at both ends: sample densely, slow down, or start and end slower)",
             )
     return path
+
+
+def check_path_start(path: TimedPath, measured, joint_names, max_speed, max_acceleration) -> None:
+    """Start ``path`` from the ``measured`` joints (TimedPath.start_from), refusing with
+    TOO_FAR when the easing onto it, on top of the path's own first ``START_BLEND`` s,
+    would pass the driver's speed or acceleration limits."""
+    extra_speed, extra_acceleration = path.start_from(measured)
+    speeds, accelerations = path.peaks()
+    early = path.times[:-1] < path._blend  # the intervals the easing overlaps
+    dof = len(joint_names)
+    for peaks, extra, limit, what, unit in (
+        (speeds, extra_speed, max_speed, "speed", "rad/s"),
+        (accelerations, extra_acceleration, max_acceleration, "acceleration", "rad/s^2"),
+    ):
+        allowed = np.broadcast_to(np.asarray(limit, dtype=np.float64), (dof,))
+        worst = np.max(peaks[early], axis=0) + extra
+        over = np.flatnonzero(worst > allowed)
+        if over.size:
+            j = over[0]
+            _refuse(
+                Result.TOO_FAR,
+                f"easing from the measured joints onto the first sample ({abs(path._offset[j]):.4f} rad away) "
+                f"over {path._blend:g} s takes {joint_names[j]}'s {what} to {worst[j]:.3g} {unit}, over the driver's "
+                f"{allowed[j]:.3g}: start the path where the arm is (MOVE_J there first)",
+            )

@@ -431,8 +431,9 @@ class URRtdeDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
             self._fault = f"servoStop failed: {exc}"
 
     def stop(self, reason: str = "STOP") -> None:
-        """Stop now, from any thread: stopL for a MoveL, stopJ otherwise, servoStop for
-        streaming; a blocking move being watched answers INTERRUPTED within one period."""
+        """Stop now, from any thread: stopL for a MoveL, servoStop for streaming and a
+        timed path, stopJ otherwise; a blocking move being watched answers INTERRUPTED
+        within one period."""
         with self._lock:
             if self._control is None:
                 return
@@ -446,6 +447,8 @@ class URRtdeDriver(RealControllerMixin, UrdfModelMixin, RobotDriver):
                 try:
                     if active == "moveL":
                         _stop_call(self._control.stopL, self.linear_stop_deceleration)
+                    elif active == "path":  # servoJ motion: servoStop, as for a stream
+                        self._control.servoStop(self.servo_stop_deceleration)
                     else:
                         _stop_call(self._control.stopJ, self.joint_stop_deceleration)
                 except Exception as exc:  # the connection may be gone; nothing moves then

@@ -317,17 +317,22 @@ class EpisodeReplay:
 
     def _follow(self, report, targets, step_s, lead_s, actions, tool_poses, tool_at, gripper, gripper_client):
         """The curve as one timed path; the gripper set meanwhile where the actions change it
-        (when the path reaches their frame); then each frame's tool at the path's start plus
-        the frame's time."""
+        (at their frame's moment counted from when the path was sent, on the replay's clock:
+        the path's start comes later by the service call's latency); then each frame's tool
+        at the path's start plus the frame's time. Leaving early (an error, Ctrl-C) STOPs
+        the path."""
         dof = len(targets[0])
         times = [step * step_s for step in range(len(targets))]
         outcome = {}
+        finished = threading.Event()
 
         def follow():
             try:
                 outcome["started"] = self.client.follow_path(times, [[float(v) for v in t] for t in targets])
             except Exception as exc:  # noqa: BLE001 - handed to the caller's thread
                 outcome["error"] = exc
+            finally:
+                finished.set()
 
         thread = threading.Thread(target=follow, name="replay-path", daemon=True)
         sent_at = self.clock()
@@ -338,12 +343,23 @@ class EpisodeReplay:
             if closed != gripper:
                 changes.append((max(frame * self.period - lead_s, 0.0), closed))
                 gripper = closed
-        for moment, closed in changes:
-            self._wait_until(sent_at + moment)
-            if "error" in outcome:  # refused or cut short: the gripper stays as it is
-                break
-            (gripper_client or self.client).set_gripper(closed)
-        thread.join()
+        side = gripper_client or self.client
+        try:
+            for moment, closed in changes:
+                self._wait_until(sent_at + moment, finished)
+                if "error" in outcome:  # refused or cut short: the gripper stays as it is
+                    break
+                side.set_gripper(closed)
+            thread.join()
+        except BaseException:
+            # Leaving while the arm follows the path (a gripper error, Ctrl-C): the server
+            # would follow it to its end for nobody. STOP it, on the side connection.
+            if not finished.is_set():
+                try:
+                    side.stop()
+                finally:
+                    thread.join(timeout=5.0)
+            raise
         if "error" in outcome:
             raise outcome["error"]
         report.transport = "path"
@@ -369,7 +385,14 @@ class EpisodeReplay:
                 report.add(i, 1000.0 * float(np.linalg.norm(np.asarray(position) - tool_poses[i, :3])))
         return waiting
 
-    def _wait_until(self, moment: float) -> None:
+    def _wait_until(self, moment: float, finished: threading.Event | None = None) -> None:
+        """Sleep until ``moment`` (the replay's clock); with ``finished``, in slices of at
+        most 10 ms, returning once it is set."""
         wait = moment - self.clock()
-        if wait > 0:
-            self.sleep(wait)
+        if finished is None:
+            if wait > 0:
+                self.sleep(wait)
+            return
+        while wait > 0 and not finished.is_set():
+            self.sleep(min(wait, 0.01))
+            wait = moment - self.clock()

@@ -20,7 +20,14 @@ from hw_interface.protocol import CommandIndex, Result
 from hw_interface.robot_hw import RobotDriver
 from hw_interface.sim_driver import PybulletSimDriver
 from hw_interface.testing.fake_rtde import FakeUR
-from hw_interface.timed_path import MAX_PATH_SAMPLES, TimedPath, check_timed_path
+from hw_interface.timed_path import (
+    MAX_PATH_DURATION,
+    MAX_PATH_SAMPLES,
+    START_BLEND,
+    TimedPath,
+    check_path_start,
+    check_timed_path,
+)
 from hw_interface.ur_driver import URRtdeDriver
 
 from ..conftest import HOME, UR5E
@@ -201,10 +208,11 @@ def test_the_simulated_arm_follows_a_path_exactly_under_a_stall_of_its_thread(fa
     assert calm_answer.started == pytest.approx(stalled_answer.started)
     # Step for step the same targets: the path's, at each step's simulated time.
     assert len(calm_steps) == len(stalled_steps) > len(times)
-    path = TimedPath(times, joints)
-    for k, (a, b) in enumerate(zip(calm_steps, stalled_steps)):
-        np.testing.assert_allclose(a, path.sample(k * calm.time_step), atol=1e-12)
-        np.testing.assert_allclose(b, path.sample(k * calm.time_step), atol=1e-12)
+    for steps in (calm_steps, stalled_steps):
+        path = TimedPath(times, joints)
+        path.start_from(steps[0])  # each starts where its arm was: the first command
+        for k, target in enumerate(steps):
+            np.testing.assert_allclose(target, path.sample(k * calm.time_step), atol=1e-12)
     assert stalled.overruns == calm.overruns == 0
 
 
@@ -276,4 +284,81 @@ def test_the_ur_driver_samples_the_path_by_its_clock():
         np.testing.assert_allclose(target, path.sample(now), atol=1e-12)
     assert moments[-1][0] >= path.duration
     assert driver._active_move is None
+    driver.disconnect()
+
+
+def test_a_path_starts_where_the_arm_is_and_eases_onto_its_first_sample():
+    times, joints = swing()
+    path = TimedPath(times, joints)
+    measured = HOME + np.array([0.03, -0.02, 0.0, 0.0, 0.0, 0.01])
+    extra_speed, extra_acceleration = path.start_from(measured)
+    np.testing.assert_allclose(path.sample(0.0), measured)  # the first command: no step
+    np.testing.assert_allclose(path.velocity(1e-9), TimedPath(times, joints).velocity(1e-9), atol=1e-6)
+    plain = TimedPath(times, joints)
+    fine = np.linspace(0.0, path.duration, 8001)
+    eased = np.array([path.sample(t) for t in fine])
+    for t in (START_BLEND, START_BLEND + 0.05, path.duration):  # on the path from the blend's end
+        np.testing.assert_allclose(path.sample(t), plain.sample(t), atol=1e-12)
+    # velocity() is the derivative of sample(), and the easing adds no more than it says.
+    numeric = np.diff(eased, axis=0) / np.diff(fine)[:, None]
+    analytic = np.array([path.velocity(t) for t in (fine[1:] + fine[:-1]) / 2])
+    np.testing.assert_allclose(numeric, analytic, atol=2e-3)
+    added = np.abs(numeric - np.diff([plain.sample(t) for t in fine], axis=0) / np.diff(fine)[:, None])
+    assert np.all(added.max(axis=0) <= extra_speed + 1e-6)
+    assert extra_acceleration[0] == pytest.approx(0.03 * 6.0 / START_BLEND**2)
+    # A gap the driver's limits cannot ease within 0.25 s is refused.
+    names = [f"j{i}" for i in range(6)]
+    with pytest.raises(HwInterfaceError, match="easing from the measured joints .*j0's speed") as err:
+        check_path_start(TimedPath(times, joints), measured, names, max_speed=0.5, max_acceleration=1e3)
+    assert err.value.result == Result.TOO_FAR
+    check_path_start(TimedPath(times, joints), measured, names, max_speed=3.0, max_acceleration=1e3)
+
+
+def test_a_path_in_milliseconds_is_refused_for_its_length():
+    driver, dispatcher = sim_dispatcher()
+    followed = []
+    driver.follow_path = lambda path, timeout=30.0: followed.append(path)
+    times, joints = swing()
+    answer = send(dispatcher, times * (MAX_PATH_DURATION + 1.0) / times[-1], joints)
+    assert answer.result == Result.WRONG_LENGTH and "times are in seconds" in answer.reason
+    assert not followed
+    driver.disconnect()
+
+
+def test_a_disconnect_ends_a_running_path_it_never_goes_on_in_the_next_session(fake_time):
+    clock, make = fake_time
+    driver = make()
+    dispatcher = CommandDispatcher(driver)
+    clock.hooks[50] = lambda: threading.Thread(target=driver.disconnect).start()
+    answer = send(dispatcher, *swing(duration=1.0))
+    assert answer.result == Result.INTERRUPTED and "disconnected" in answer.reason
+    assert wait_for(lambda: driver._client is None, 30.0)
+    driver.login()
+    assert driver._path is None
+    driver.disconnect()
+
+
+def test_stop_during_a_ur_path_stops_the_servo_and_answers_interrupted():
+    fake = FakeUR(UR5E, initial_joints=HOME)
+    clock = StepClock()
+    driver = URRtdeDriver(UR5E, robot_ip="192.0.2.10", armed=True, rtde_classes=fake.classes(), clock=clock)
+    driver.login()
+    driver._control.waitPeriod = clock.wait_period
+    outcome = {}
+
+    def follow():
+        try:
+            driver.follow_path(TimedPath(*swing(duration=5.0)), timeout=10.0)
+        except HwInterfaceError as exc:
+            outcome["error"] = exc
+
+    runner = threading.Thread(target=follow)
+    runner.start()
+    assert wait_for(lambda: clock.periods > 20, 30.0)
+    driver.stop("STOP")
+    runner.join(30.0)
+    assert outcome["error"].result == Result.INTERRUPTED
+    names = fake.call_names() if hasattr(fake, "call_names") else [name for name, _ in fake.calls]
+    after = names[max(i for i, n in enumerate(names) if n == "servoJ") + 1 :]
+    assert "servoStop" in after, names[-5:]
     driver.disconnect()

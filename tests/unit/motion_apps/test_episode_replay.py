@@ -3,6 +3,7 @@ summary and picture."""
 
 import json
 import os
+import threading
 
 import numpy as np
 import pytest
@@ -486,3 +487,58 @@ def test_a_driver_without_timed_paths_gets_the_stream_and_a_refused_path_is_repo
     assert report.refused == 1 and report.reason == "path: FOLLOW_PATH refused: TOO_FAR" and arm.sent == 0
     with pytest.raises(ValueError, match="needs tool_at"):
         replay.run(states, actions, tools, transport="path")
+
+
+def test_a_refused_path_is_reported_at_once_not_at_the_first_gripper_change():
+    states, actions, tools = _episode()  # the gripper closes at frame 10: 1.0 s in
+    now, threads = [0.0], []
+    arm = _PathArm(now)
+
+    def refuse(times, joints):
+        threads.append(threading.current_thread())
+        raise RuntimeError("FOLLOW_PATH refused: TOO_FAR")
+
+    def sleep(seconds):  # the path's thread has answered before the replay's time moves on
+        threads[0].join(5.0) if threads else None
+        now[0] += seconds
+
+    arm.follow_path = refuse
+    gripper = _Arm()
+    report = EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=sleep, settle_s=0.0).run(
+        states, actions, tools, tool_at=lambda moment: None, transport="path", gripper_client=gripper
+    )
+    assert report.refused == 1 and "TOO_FAR" in report.reason
+    assert now[0] < 0.05, f"the refusal was reported {now[0]:.2f} s late"
+    assert gripper.calls == []
+
+
+def test_a_replay_left_while_its_path_runs_stops_the_path():
+    states, actions, tools = _episode()
+    now = [0.0]
+    arm = _PathArm(now)
+    running, stopped = threading.Event(), threading.Event()
+
+    def follow(times, joints):  # a path the server follows until a STOP cuts it
+        running.set()
+        assert stopped.wait(5.0), "nobody stopped the path"
+        raise RuntimeError("FOLLOW_PATH: INTERRUPTED by STOP")
+
+    class Side(_Arm):
+        def set_gripper(self, closed):
+            raise RuntimeError("SET_GRIPPER: DRIVER_FAULT")
+
+        def stop(self):
+            self.calls.append(("stop",))
+            stopped.set()
+
+    def sleep(seconds):
+        running.wait(5.0)
+        now[0] += seconds
+
+    arm.follow_path = follow
+    side = Side()
+    report = EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=sleep).run(
+        states, actions, tools, tool_at=lambda moment: None, transport="path", gripper_client=side
+    )
+    assert side.calls == [("stop",)] and stopped.is_set()
+    assert report.refused == 1 and "DRIVER_FAULT" in report.reason
