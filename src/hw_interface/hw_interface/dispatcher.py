@@ -393,6 +393,16 @@ class CommandDispatcher:
         elif command == CommandIndex.FOLLOW_PATH:
             if not self._blocking_motion.acquire(blocking=False):
                 raise HwInterfaceError("another MOVE_J/MOVE_L/FOLLOW_PATH is running; wait or send STOP", Result.BUSY)
+            with self._stream_lock:
+                streaming = self._clock() - self._stream_time <= STREAM_REFERENCE_TIMEOUT
+            if streaming:  # the easing onto the path starts from rest, not from a moving arm
+                self._blocking_motion.release()
+                raise HwInterfaceError(
+                    "FOLLOW_PATH refused: a SET_JOINTS stream moved the arm in the last "
+                    f"{STREAM_REFERENCE_TIMEOUT:g} s; a path starts from an arm at rest: "
+                    "let the stream end, or STOP, first",
+                    Result.BUSY,
+                )
             self._note_stream(None)
             try:
                 current = np.asarray(driver.get_robot_joints(), dtype=float)
@@ -406,7 +416,7 @@ class CommandDispatcher:
                         Result.TOO_FAR,
                     )
                 # The first command is where the arm is: the path eases onto its first sample.
-                check_path_start(path, current, driver.joint_names, *driver.path_limits())
+                check_path_start(path, current, driver.joint_names, self._limit_lists, *driver.path_limits())
                 # The move timeout counts from the path's end: a path may be longer than it.
                 return (), driver.follow_path(path, timeout=path.duration + self.move_timeout)
             finally:

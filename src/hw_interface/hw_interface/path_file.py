@@ -12,43 +12,67 @@ import os
 
 import numpy as np
 
-from .timed_path import MAX_PATH_SAMPLES
+from .timed_path import MAX_PATH_DURATION, MAX_PATH_SAMPLES
 
 __all__ = ["read_path_file", "check_path_dof"]
 
 
-def _load(filename: str) -> np.ndarray:
+def _number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _load(filename: str) -> tuple[np.ndarray, list[str]]:
+    """(the table, where each row is in the file: "line N" or "row N")."""
     if filename.lower().endswith(".npy"):
         try:
-            return np.load(filename, allow_pickle=False)
+            table = np.load(filename, mmap_mode="r", allow_pickle=False)
         except (OSError, ValueError) as exc:
             raise ValueError(f"{filename}: not a NumPy .npy array of numbers ({exc})") from None
-    with open(filename, encoding="utf-8") as stream:
-        lines = [(number, line.split("#", 1)[0].strip()) for number, line in enumerate(stream, 1)]
-    lines = [(number, text) for number, text in lines if text]
-    if lines:
-        try:
-            [float(v) for v in lines[0][1].split(",")]
-        except ValueError:
-            lines = lines[1:]  # a header line (time, joint names)
-    rows = []
-    for number, text in lines:
-        try:
-            rows.append([float(v) for v in text.split(",")])
-        except ValueError:
-            raise ValueError(f"{filename}:{number}: not comma-separated numbers: {text[:80]!r}") from None
-        if len(rows[-1]) != len(rows[0]):
-            raise ValueError(f"{filename}:{number}: {len(rows[-1])} columns where the first row has {len(rows[0])}")
-    return np.array(rows, dtype=np.float64)
+        if not isinstance(table, np.ndarray):
+            raise ValueError(f"{filename}: not a NumPy .npy array (an .npz archive?)")
+        if table.ndim == 2 and table.shape[0] > MAX_PATH_SAMPLES:
+            raise ValueError(f"{filename}: {table.shape[0]} rows: a path holds at most {MAX_PATH_SAMPLES}; split it")
+        return np.array(table), [f"row {i + 1}" for i in range(len(table))]
+    rows, places = [], []
+    try:
+        with open(filename, encoding="utf-8") as stream:
+            for number, line in enumerate(stream, 1):
+                text = line.split("#", 1)[0].strip()
+                if not text:
+                    continue
+                fields = text.split(",")
+                if not rows and not places and not any(_number(v) for v in fields):
+                    places.append("header")  # a header line (time, joint names): no number in it
+                    continue
+                try:
+                    rows.append([float(v) for v in fields])
+                except ValueError:
+                    raise ValueError(f"{filename}:{number}: not comma-separated numbers: {text[:80]!r}") from None
+                places.append(f"line {number}")
+                if len(rows[-1]) != len(rows[0]):
+                    raise ValueError(
+                        f"{filename}:{number}: {len(rows[-1])} columns where the first row has {len(rows[0])}"
+                    )
+                if len(rows) > MAX_PATH_SAMPLES:
+                    raise ValueError(f"{filename}: more than {MAX_PATH_SAMPLES} rows: a path holds no more; split it")
+    except (OSError, UnicodeError) as exc:
+        raise ValueError(f"{filename}: cannot be read as a text CSV ({exc})") from None
+    places = [place for place in places if place != "header"]
+    return np.array(rows, dtype=np.float64), places
 
 
 def read_path_file(filename: str) -> tuple[np.ndarray, np.ndarray]:
     """(times from 0 (n), joints (n x dof)) of a path file, or ValueError naming the file
-    and the row: at least 2 rows of at least 2 columns, at most MAX_PATH_SAMPLES rows,
-    every value finite, times strictly increasing."""
+    and the row (a CSV's line): at least 2 rows of at least 2 columns, at most
+    MAX_PATH_SAMPLES rows and MAX_PATH_DURATION s, every value finite, times strictly
+    increasing."""
     if not os.path.isfile(filename):
         raise ValueError(f"{filename}: no such file")
-    table = _load(filename)
+    table, places = _load(filename)
     if table.dtype.kind not in "fiu":
         raise ValueError(f"{filename}: holds {table.dtype}, not numbers")
     table = np.asarray(table, dtype=np.float64)
@@ -61,14 +85,18 @@ def read_path_file(filename: str) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{filename}: {table.shape[0]} rows: a path holds at most {MAX_PATH_SAMPLES}; split it")
     bad = np.flatnonzero(~np.all(np.isfinite(table), axis=1))
     if bad.size:
-        raise ValueError(f"{filename}: row {bad[0] + 1} has a value that is no number: {table[bad[0]].tolist()}")
+        raise ValueError(f"{filename}: {places[bad[0]]} has a value that is no number: {table[bad[0]].tolist()}")
     times = table[:, 0] - table[0, 0]
     bad = np.flatnonzero(np.diff(times) <= 0.0)
     if bad.size:
-        row = bad[0] + 2
+        i = bad[0] + 1
         raise ValueError(
-            f"{filename}: row {row}'s time {table[row - 1, 0]:g} s does not come after row {row - 1}'s "
-            f"{table[row - 2, 0]:g} s (times must increase strictly)"
+            f"{filename}: {places[i]}'s time {table[i, 0]:g} s does not come after {places[i - 1]}'s "
+            f"{table[i - 1, 0]:g} s (times must increase strictly)"
+        )
+    if times[-1] > MAX_PATH_DURATION:
+        raise ValueError(
+            f"{filename}: the path lasts {times[-1]:g} s, over the {MAX_PATH_DURATION:g} s a path may (times in s)"
         )
     return times, table[:, 1:].copy()
 

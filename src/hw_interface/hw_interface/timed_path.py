@@ -185,14 +185,29 @@ def check_timed_path(
     return path
 
 
-def check_path_start(path: TimedPath, measured, joint_names, max_speed, max_acceleration) -> None:
+def check_path_start(path: TimedPath, measured, joint_names, limits, max_speed, max_acceleration) -> None:
     """Start ``path`` from the ``measured`` joints (TimedPath.start_from), refusing with
-    TOO_FAR when the easing onto it, on top of the path's own first ``START_BLEND`` s,
-    would pass the driver's speed or acceleration limits."""
+    JOINT_LIMIT when the easing onto it could take a joint past its ``limits`` ((lower,
+    upper)), and TOO_FAR when, on top of the path's own first ``START_BLEND`` s, it would
+    pass the driver's speed or acceleration limits."""
     extra_speed, extra_acceleration = path.start_from(measured)
     speeds, accelerations = path.peaks()
     early = path.times[:-1] < path._blend  # the intervals the easing overlaps
     dof = len(joint_names)
+    # The curve stays within its samples; the easing adds at most the offset (weight 0..1).
+    reach = path.joints[: int(np.count_nonzero(early)) + 1]
+    lower, upper = (np.asarray(v, dtype=np.float64) for v in limits)
+    high = reach.max(axis=0) + np.maximum(path._offset, 0.0)
+    low = reach.min(axis=0) + np.minimum(path._offset, 0.0)
+    outside = np.flatnonzero((high > upper) | (low < lower))
+    if outside.size:
+        j = outside[0]
+        _refuse(
+            Result.JOINT_LIMIT,
+            f"easing from the measured joints onto the first sample ({path._offset[j]:+.4f} rad away) could take "
+            f"{joint_names[j]} to {low[j]:.4f}..{high[j]:.4f}, outside its limits {lower[j]:.4f}..{upper[j]:.4f}: "
+            "start the path where the arm is (MOVE_J there first)",
+        )
     for peaks, extra, limit, what, unit in (
         (speeds, extra_speed, max_speed, "speed", "rad/s"),
         (accelerations, extra_acceleration, max_acceleration, "acceleration", "rad/s^2"),

@@ -334,9 +334,6 @@ class EpisodeReplay:
             finally:
                 finished.set()
 
-        thread = threading.Thread(target=follow, name="replay-path", daemon=True)
-        sent_at = self.clock()
-        thread.start()
         changes = []
         for frame in range(1, len(actions)):
             closed = bool(actions[frame, dof] > 0.5)
@@ -344,7 +341,10 @@ class EpisodeReplay:
                 changes.append((max(frame * self.period - lead_s, 0.0), closed))
                 gripper = closed
         side = gripper_client or self.client
+        thread = threading.Thread(target=follow, name="replay-path", daemon=True)
         try:
+            sent_at = self.clock()
+            thread.start()
             for moment, closed in changes:
                 self._wait_until(sent_at + moment, finished)
                 if "error" in outcome:  # refused or cut short: the gripper stays as it is
@@ -354,11 +354,12 @@ class EpisodeReplay:
         except BaseException:
             # Leaving while the arm follows the path (a gripper error, Ctrl-C): the server
             # would follow it to its end for nobody. STOP it, on the side connection.
-            if not finished.is_set():
+            if thread.is_alive() and not finished.is_set():
                 try:
                     side.stop()
-                finally:
-                    thread.join(timeout=5.0)
+                except Exception as exc:  # noqa: BLE001 - the reason we are leaving is the one to raise
+                    self.log(f"replay_episode: could not STOP the path ({exc}); the server follows it to its end")
+                thread.join(timeout=5.0)
             raise
         if "error" in outcome:
             raise outcome["error"]

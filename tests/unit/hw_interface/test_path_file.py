@@ -50,9 +50,12 @@ def test_an_npy_array(tmp_path):
     [
         ("0,1,2\n0.1,1,2,3\n", r"bad\.csv:2: 4 columns where the first row has 3"),
         ("0,1,2\n0.1,1,x\n", r"bad\.csv:2: not comma-separated numbers"),
-        ("0,1,2\n0.1,1,nan\n", r"row 2 has a value that is no number"),
-        ("0,1,2\n0.2,1,2\n0.2,1,2\n", r"row 3's time 0.2 s does not come after row 2's 0.2 s"),
-        ("0,1,2\n0.2,1,2\n0.1,1,2\n", r"row 3's time 0.1 s does not come after row 2's"),
+        ("0,1,2\n0.1,1,nan\n", r"line 2 has a value that is no number"),
+        ("# a comment\ntime,a,b\n0,1,2\n0.1,1,nan\n", r"line 4 has a value that is no number"),
+        ("0,1,2\n0.2,1,2\n0.2,1,2\n", r"line 3's time 0.2 s does not come after line 2's 0.2 s"),
+        ("0,1,2\n0.2,1,2\n0.1,1,2\n", r"line 3's time 0.1 s does not come after line 2's"),
+        ("0,1,2x\n0.1,1,2\n0.2,1.1,2\n", r"bad\.csv:1: not comma-separated numbers"),  # not a header
+        ("0,1,2\n4000,1,2\n", r"lasts 4000 s, over the 3600 s"),
         ("0,1,2\n", r"at least 2 rows of time \+ joints, got shape \(1, 3\)"),
         ("0\n1\n", r"got shape \(2, 1\)"),
         ("", r"got shape"),
@@ -73,6 +76,13 @@ def test_a_malformed_npy_and_a_missing_file_are_refused(tmp_path):
     (tmp_path / "junk.npy").write_bytes(b"not an array")
     with pytest.raises(ValueError, match=r"junk\.npy: not a NumPy \.npy array"):
         read_path_file(str(tmp_path / "junk.npy"))
+    np.savez(tmp_path / "archive.npz", path=np.zeros((3, 7)))
+    os.rename(tmp_path / "archive.npz", tmp_path / "archive.npy")
+    with pytest.raises(ValueError, match=r"archive\.npy: not a NumPy \.npy array"):
+        read_path_file(str(tmp_path / "archive.npy"))
+    (tmp_path / "binary.csv").write_bytes(b"\xff\xfe\x00\x81")
+    with pytest.raises(ValueError, match=r"binary\.csv: cannot be read as a text CSV"):
+        read_path_file(str(tmp_path / "binary.csv"))
     with pytest.raises(ValueError, match=r"absent\.csv: no such file"):
         read_path_file(str(tmp_path / "absent.csv"))
 

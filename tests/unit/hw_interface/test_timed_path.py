@@ -308,10 +308,33 @@ def test_a_path_starts_where_the_arm_is_and_eases_onto_its_first_sample():
     assert extra_acceleration[0] == pytest.approx(0.03 * 6.0 / START_BLEND**2)
     # A gap the driver's limits cannot ease within 0.25 s is refused.
     names = [f"j{i}" for i in range(6)]
+    wide = (np.full(6, -6.0), np.full(6, 6.0))
     with pytest.raises(HwInterfaceError, match="easing from the measured joints .*j0's speed") as err:
-        check_path_start(TimedPath(times, joints), measured, names, max_speed=0.5, max_acceleration=1e3)
+        check_path_start(TimedPath(times, joints), measured, names, wide, max_speed=0.5, max_acceleration=1e3)
     assert err.value.result == Result.TOO_FAR
-    check_path_start(TimedPath(times, joints), measured, names, max_speed=3.0, max_acceleration=1e3)
+    check_path_start(TimedPath(times, joints), measured, names, wide, max_speed=3.0, max_acceleration=1e3)
+    # Samples within the limits, an arm beyond the first one: the easing could pass a limit.
+    tight = (np.full(6, -6.0), np.r_[joints[:, 0].max() + 0.01, np.full(5, 6.0)])
+    with pytest.raises(HwInterfaceError, match="could take j0 .*outside its limits") as err:
+        check_path_start(TimedPath(times, joints), measured, names, tight, max_speed=3.0, max_acceleration=1e3)
+    assert err.value.result == Result.JOINT_LIMIT
+
+
+def test_the_server_starts_a_path_from_the_measured_joints_and_not_under_a_stream():
+    driver, dispatcher = sim_dispatcher()
+    followed = []
+    driver.follow_path = lambda path, timeout=30.0: followed.append(path)
+    here = np.asarray(driver.get_robot_joints())
+    times, joints = swing()
+    joints = joints + np.array([0.03, 0.0, 0.0, 0.0, 0.0, 0.0])  # the first sample 30 mrad off
+    assert send(dispatcher, times, joints).result == Result.SUCCESS
+    np.testing.assert_allclose(followed[0].sample(0.0), here, atol=1e-9)  # the first command: the arm
+    np.testing.assert_allclose(followed[0].sample(START_BLEND), TimedPath(times, joints).sample(START_BLEND))
+    # Under a live SET_JOINTS stream the arm may be moving: the easing assumes rest.
+    assert dispatcher.handle(CommandIndex.SET_JOINTS, joints=here.tolist()).result == Result.SUCCESS
+    answer = send(dispatcher, times, joints)
+    assert answer.result == Result.BUSY and "stream" in answer.reason and len(followed) == 1
+    driver.disconnect()
 
 
 def test_a_path_in_milliseconds_is_refused_for_its_length():
