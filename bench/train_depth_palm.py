@@ -352,15 +352,24 @@ def main():
     parser.add_argument("--validate-subjects", help="comma-separated tuning subjects left out and measured")
     parser.add_argument("--out", default=OUT, help="folder of depth_palm.onnx and depth_palm.json")
     args = parser.parse_args()
+    # What a cache was collected with: it serves only a run that asks for the same frames
+    # (or fewer varied copies).
+    collect_args = ("per_subject", "synthetic", "seed", "varied")
+    wanted = {name: getattr(args, name) for name in collect_args}
     if args.cache and os.path.exists(args.cache):
         frames = dict(np.load(args.cache))
+        cached = dict(zip(collect_args, frames.pop("collected_with", np.full(4, -1)).tolist()))
+        if any(cached[name] != wanted[name] for name in collect_args[:3]) or cached["varied"] < args.varied:
+            parser.error(
+                f"--cache {args.cache} was collected with {cached} (-1: not recorded), this run asks for {wanted}: "
+                "delete it or name another"
+            )
     else:
         print("rendering and tracking ...", flush=True)
         frames = collect(args)
         if args.cache:
-            np.savez(args.cache, **frames)
+            np.savez(args.cache, collected_with=np.array([wanted[name] for name in collect_args]), **frames)
     # A cache may hold more varied copies than asked for: those are left out.
-    frames.setdefault("variant", np.zeros(len(frames["truth"]), int))
     keep = frames["variant"] <= args.varied
     frames = {k: (v[keep] if k != "sequences" else v) for k, v in frames.items()}
     count = len(frames["truth"])
