@@ -206,7 +206,6 @@ class CommandDispatcher:
             refusal = self._validate(command, position, orientation, joints)
             if refusal is not None:
                 return self._answer(refusal[0], refusal[1])
-            path = self._check_path(times, joints) if command == CommandIndex.FOLLOW_PATH else None
             if motion:
                 with self._gate:
                     if self._latched:
@@ -220,6 +219,9 @@ class CommandDispatcher:
                     self._in_flight += 1
                     epoch = self._stop_epoch
             try:
+                # A path is checked once in flight (60000 samples take ~0.1 s): a STOP that
+                # comes meanwhile is repeated until it returns, and cuts the path it starts.
+                path = self._check_path(times, joints) if command == CommandIndex.FOLLOW_PATH else None
                 robots, started = self._execute(command, position, orientation, joints, url, path)
             finally:
                 if motion:

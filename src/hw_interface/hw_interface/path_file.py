@@ -1,8 +1,9 @@
 """A timed joint path read from a file for FOLLOW_PATH (``motion_controller_client
 follow_path FILE``): one row per sample, its time (s) then the robot's joints (rad).
 
-Plain Python, no ROS. A CSV (comma-separated, ``#`` comments, an optional header line) or
-a NumPy ``.npy`` array of shape (samples, 1 + joints). Times count from the first row's:
+Plain Python, no ROS. A CSV (comma-separated, ``#`` comments, an optional header line:
+a first line with no number in it and as many fields as the data) or a NumPy ``.npy`` array
+of shape (samples, 1 + joints). Times count from the first row's:
 a file exported with absolute stamps is sent as it is. The file's form is checked here,
 each refusal naming the file and the row, before anything is sent; the server still checks
 the path against the robot (limits, speed, where the arm is).
@@ -14,7 +15,10 @@ import numpy as np
 
 from .timed_path import MAX_PATH_DURATION, MAX_PATH_SAMPLES
 
-__all__ = ["read_path_file", "check_path_dof"]
+__all__ = ["read_path_file", "check_path_dof", "MAX_COLUMNS"]
+
+#: Most columns a path row may have: its time and up to 63 joints.
+MAX_COLUMNS = 64
 
 
 def _number(text: str) -> bool:
@@ -34,24 +38,37 @@ def _load(filename: str) -> tuple[np.ndarray, list[str]]:
             raise ValueError(f"{filename}: not a NumPy .npy array of numbers ({exc})") from None
         if not isinstance(table, np.ndarray):
             raise ValueError(f"{filename}: not a NumPy .npy array (an .npz archive?)")
-        if table.ndim == 2 and table.shape[0] > MAX_PATH_SAMPLES:
+        # The shape is checked on the memory map, before anything is copied.
+        if table.ndim != 2 or not 2 <= table.shape[1] <= MAX_COLUMNS:
+            raise ValueError(
+                f"{filename}: a path is rows of time + joints (2 to {MAX_COLUMNS} columns), got shape {table.shape}"
+            )
+        if table.shape[0] > MAX_PATH_SAMPLES:
             raise ValueError(f"{filename}: {table.shape[0]} rows: a path holds at most {MAX_PATH_SAMPLES}; split it")
         return np.array(table), [f"row {i + 1}" for i in range(len(table))]
     rows, places = [], []
     try:
-        with open(filename, encoding="utf-8") as stream:
+        header = None  # (line, fields) of a first line without a number: a header if the data agree
+        with open(filename, encoding="utf-8-sig") as stream:
             for number, line in enumerate(stream, 1):
                 text = line.split("#", 1)[0].strip()
                 if not text:
                     continue
                 fields = text.split(",")
-                if not rows and not places and not any(_number(v) for v in fields):
-                    places.append("header")  # a header line (time, joint names): no number in it
+                if len(fields) > MAX_COLUMNS:
+                    raise ValueError(f"{filename}:{number}: {len(fields)} columns, a row has at most {MAX_COLUMNS}")
+                if not rows and header is None and len(fields) > 1 and not any(_number(v) for v in fields):
+                    header = (number, fields)  # time, joint names
                     continue
                 try:
                     rows.append([float(v) for v in fields])
                 except ValueError:
                     raise ValueError(f"{filename}:{number}: not comma-separated numbers: {text[:80]!r}") from None
+                if header is not None and len(rows) == 1 and len(header[1]) != len(fields):
+                    raise ValueError(
+                        f"{filename}:{header[0]}: not comma-separated numbers, nor a header of the data's "
+                        f"{len(fields)} columns: {','.join(header[1])[:80]!r}"
+                    )
                 places.append(f"line {number}")
                 if len(rows[-1]) != len(rows[0]):
                     raise ValueError(
@@ -61,7 +78,6 @@ def _load(filename: str) -> tuple[np.ndarray, list[str]]:
                     raise ValueError(f"{filename}: more than {MAX_PATH_SAMPLES} rows: a path holds no more; split it")
     except (OSError, UnicodeError) as exc:
         raise ValueError(f"{filename}: cannot be read as a text CSV ({exc})") from None
-    places = [place for place in places if place != "header"]
     return np.array(rows, dtype=np.float64), places
 
 

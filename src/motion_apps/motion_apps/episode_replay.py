@@ -342,25 +342,30 @@ class EpisodeReplay:
                 gripper = closed
         side = gripper_client or self.client
         thread = threading.Thread(target=follow, name="replay-path", daemon=True)
+        launched = False
         try:
             sent_at = self.clock()
             thread.start()
+            launched = True
             for moment, closed in changes:
                 self._wait_until(sent_at + moment, finished)
                 if "error" in outcome:  # refused or cut short: the gripper stays as it is
                     break
                 side.set_gripper(closed)
-            thread.join()
+            # An Event, not Thread.join: Python 3.11.2's join, interrupted by Ctrl-C, marks the
+            # thread stopped while it still waits for the path (is_alive() then lies).
+            finished.wait()
         except BaseException:
             # Leaving while the arm follows the path (a gripper error, Ctrl-C): the server
             # would follow it to its end for nobody. STOP it, on the side connection.
-            if thread.is_alive() and not finished.is_set():
+            if launched and not finished.is_set():
                 try:
                     side.stop()
                 except Exception as exc:  # noqa: BLE001 - the reason we are leaving is the one to raise
                     self.log(f"replay_episode: could not STOP the path ({exc}); the server follows it to its end")
-                thread.join(timeout=5.0)
+                finished.wait(timeout=5.0)
             raise
+        thread.join()
         if "error" in outcome:
             raise outcome["error"]
         report.transport = "path"

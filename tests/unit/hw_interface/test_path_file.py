@@ -55,6 +55,8 @@ def test_an_npy_array(tmp_path):
         ("0,1,2\n0.2,1,2\n0.2,1,2\n", r"line 3's time 0.2 s does not come after line 2's 0.2 s"),
         ("0,1,2\n0.2,1,2\n0.1,1,2\n", r"line 3's time 0.1 s does not come after line 2's"),
         ("0,1,2x\n0.1,1,2\n0.2,1.1,2\n", r"bad\.csv:1: not comma-separated numbers"),  # not a header
+        ("0 0.0 0.0\n0.1,1,2\n0.2,1.1,2\n", r"bad\.csv:1: not comma-separated numbers"),
+        ("t,a\n0.1,1,2\n0.2,1.1,2\n", r"bad\.csv:1: .*nor a header of the data's 3 columns"),
         ("0,1,2\n4000,1,2\n", r"lasts 4000 s, over the 3600 s"),
         ("0,1,2\n", r"at least 2 rows of time \+ joints, got shape \(1, 3\)"),
         ("0\n1\n", r"got shape \(2, 1\)"),
@@ -68,7 +70,7 @@ def test_a_malformed_csv_is_refused_naming_the_row(tmp_path, text, reason):
 
 def test_a_malformed_npy_and_a_missing_file_are_refused(tmp_path):
     np.save(tmp_path / "flat.npy", np.arange(7.0))
-    with pytest.raises(ValueError, match=r"flat\.npy: a path is at least 2 rows.*shape \(7,\)"):
+    with pytest.raises(ValueError, match=r"flat\.npy: a path is rows of time \+ joints .*shape \(7,\)"):
         read_path_file(str(tmp_path / "flat.npy"))
     np.save(tmp_path / "text.npy", np.array([["0", "1"], ["1", "2"]]))
     with pytest.raises(ValueError, match=r"text\.npy: holds <U1, not numbers"):
@@ -80,6 +82,12 @@ def test_a_malformed_npy_and_a_missing_file_are_refused(tmp_path):
     os.rename(tmp_path / "archive.npz", tmp_path / "archive.npy")
     with pytest.raises(ValueError, match=r"archive\.npy: not a NumPy \.npy array"):
         read_path_file(str(tmp_path / "archive.npy"))
+    np.save(tmp_path / "long.npy", np.zeros(5_000_000))  # refused on its shape, not copied
+    with pytest.raises(ValueError, match=r"long\.npy: a path is rows of time \+ joints .*shape \(5000000,\)"):
+        read_path_file(str(tmp_path / "long.npy"))
+    (tmp_path / "excel.csv").write_bytes("\ufefftime,a\n0,1\n0.5,2\n".encode())  # a UTF-8 BOM
+    times, joints = read_path_file(str(tmp_path / "excel.csv"))
+    assert times.tolist() == [0.0, 0.5] and joints.ravel().tolist() == [1.0, 2.0]
     (tmp_path / "binary.csv").write_bytes(b"\xff\xfe\x00\x81")
     with pytest.raises(ValueError, match=r"binary\.csv: cannot be read as a text CSV"):
         read_path_file(str(tmp_path / "binary.csv"))

@@ -385,3 +385,22 @@ def test_stop_during_a_ur_path_stops_the_servo_and_answers_interrupted():
     after = names[max(i for i, n in enumerate(names) if n == "servoJ") + 1 :]
     assert "servoStop" in after, names[-5:]
     driver.disconnect()
+
+
+def test_a_stop_while_the_server_checks_a_path_cuts_it(monkeypatch):
+    """60000 samples take ~0.1 s to check: a STOP in that time must not be lost."""
+    import hw_interface.dispatcher as dispatcher_module  # noqa: PLC0415
+
+    driver, dispatcher = sim_dispatcher()
+    followed = []
+    driver.follow_path = lambda path, timeout=30.0: followed.append(path) or 0.0
+    check = dispatcher_module.check_timed_path
+
+    def slow_check(*args, **kwargs):
+        assert dispatcher.handle(CommandIndex.STOP).result == Result.SUCCESS  # arrives meanwhile
+        return check(*args, **kwargs)
+
+    monkeypatch.setattr(dispatcher_module, "check_timed_path", slow_check)
+    answer = send(dispatcher, *swing())
+    assert answer.result == Result.INTERRUPTED and "STOP" in answer.reason, answer
+    driver.disconnect()

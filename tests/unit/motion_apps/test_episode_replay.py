@@ -3,7 +3,9 @@ summary and picture."""
 
 import json
 import os
+import signal
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -542,3 +544,38 @@ def test_a_replay_left_while_its_path_runs_stops_the_path():
     )
     assert side.calls == [("stop",)] and stopped.is_set()
     assert report.refused == 1 and "DRIVER_FAULT" in report.reason
+
+
+def test_ctrl_c_while_the_path_runs_stops_it():
+    """SIGINT while the replay waits for its path (no gripper change left): the path is
+    STOPped. Python 3.11.2's Thread.join, interrupted, marks the thread stopped while it
+    still waits for the server, so the replay waits on an Event."""
+    states, actions, tools = _episode()
+    actions[:, 3] = 0.0  # no gripper change: the replay goes straight to waiting for the path
+    now = [0.0]
+    arm = _PathArm(now)
+    running, stopped = threading.Event(), threading.Event()
+
+    def follow(times, joints):  # the server follows the path until a STOP cuts it
+        running.set()
+        assert stopped.wait(10.0), "nobody stopped the path"
+        raise RuntimeError("FOLLOW_PATH: INTERRUPTED by STOP")
+
+    class Side(_Arm):
+        def stop(self):
+            self.calls.append(("stop",))
+            stopped.set()
+
+    def interrupt():
+        running.wait(10.0)
+        time.sleep(0.1)  # the replay is waiting for the path by then
+        signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+
+    arm.follow_path = follow
+    side = Side()
+    threading.Thread(target=interrupt, daemon=True).start()
+    with pytest.raises(KeyboardInterrupt):
+        EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=lambda s: now.__setitem__(0, now[0] + s)).run(
+            states, actions, tools, tool_at=lambda moment: None, transport="path", gripper_client=side
+        )
+    assert side.calls == [("stop",)]
