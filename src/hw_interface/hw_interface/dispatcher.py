@@ -221,7 +221,14 @@ class CommandDispatcher:
             try:
                 # A path is checked once in flight (60000 samples take ~0.1 s): a STOP that
                 # comes meanwhile is repeated until it returns, and cuts the path it starts.
-                path = self._check_path(times, joints) if command == CommandIndex.FOLLOW_PATH else None
+                path = None
+                if command == CommandIndex.FOLLOW_PATH:
+                    path = self._check_path(times, joints)
+                    with self._gate:
+                        if self._stop_epoch != epoch:  # a STOP came during the check: never start
+                            raise HwInterfaceError(
+                                "FOLLOW_PATH interrupted by a STOP before it started", Result.INTERRUPTED
+                            )
                 robots, started = self._execute(command, position, orientation, joints, url, path)
             finally:
                 if motion:

@@ -19,6 +19,8 @@ __all__ = ["read_path_file", "check_path_dof", "MAX_COLUMNS"]
 
 #: Most columns a path row may have: its time and up to 63 joints.
 MAX_COLUMNS = 64
+#: Largest CSV read (bytes): MAX_PATH_SAMPLES rows of MAX_COLUMNS values of ~25 characters.
+MAX_CSV_BYTES = MAX_PATH_SAMPLES * MAX_COLUMNS * 26
 
 
 def _number(text: str) -> bool:
@@ -34,7 +36,7 @@ def _load(filename: str) -> tuple[np.ndarray, list[str]]:
     if filename.lower().endswith(".npy"):
         try:
             table = np.load(filename, mmap_mode="r", allow_pickle=False)
-        except (OSError, ValueError) as exc:
+        except (OSError, ValueError, EOFError) as exc:
             raise ValueError(f"{filename}: not a NumPy .npy array of numbers ({exc})") from None
         if not isinstance(table, np.ndarray):
             raise ValueError(f"{filename}: not a NumPy .npy array (an .npz archive?)")
@@ -45,8 +47,14 @@ def _load(filename: str) -> tuple[np.ndarray, list[str]]:
             )
         if table.shape[0] > MAX_PATH_SAMPLES:
             raise ValueError(f"{filename}: {table.shape[0]} rows: a path holds at most {MAX_PATH_SAMPLES}; split it")
+        if table.dtype.kind not in "fiu":
+            raise ValueError(f"{filename}: holds {table.dtype}, not numbers")
         return np.array(table), [f"row {i + 1}" for i in range(len(table))]
     rows, places = [], []
+    if os.path.getsize(filename) > MAX_CSV_BYTES:
+        raise ValueError(
+            f"{filename}: {os.path.getsize(filename)} bytes, more than a path's CSV may be ({MAX_CSV_BYTES})"
+        )
     try:
         header = None  # (line, fields) of a first line without a number: a header if the data agree
         with open(filename, encoding="utf-8-sig") as stream:

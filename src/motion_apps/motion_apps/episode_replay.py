@@ -345,8 +345,8 @@ class EpisodeReplay:
         launched = False
         try:
             sent_at = self.clock()
+            launched = True  # before start(): a Ctrl-C between the two must still STOP
             thread.start()
-            launched = True
             for moment, closed in changes:
                 self._wait_until(sent_at + moment, finished)
                 if "error" in outcome:  # refused or cut short: the gripper stays as it is
@@ -358,12 +358,18 @@ class EpisodeReplay:
         except BaseException:
             # Leaving while the arm follows the path (a gripper error, Ctrl-C): the server
             # would follow it to its end for nobody. STOP it, on the side connection.
-            if launched and not finished.is_set():
+            # The path may not have reached the server yet (60000 samples take tens of ms on
+            # the wire) and a first STOP would find nothing to stop: STOP again until the
+            # path answers (only then: a STOP after it ended could stop another's motion).
+            deadline = time.monotonic() + 5.0
+            while launched and not finished.is_set():
                 try:
                     side.stop()
                 except Exception as exc:  # noqa: BLE001 - the reason we are leaving is the one to raise
                     self.log(f"replay_episode: could not STOP the path ({exc}); the server follows it to its end")
-                finished.wait(timeout=5.0)
+                    break
+                if finished.wait(0.2) or time.monotonic() > deadline:
+                    break
             raise
         thread.join()
         if "error" in outcome:

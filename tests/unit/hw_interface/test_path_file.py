@@ -75,6 +75,9 @@ def test_a_malformed_npy_and_a_missing_file_are_refused(tmp_path):
     np.save(tmp_path / "text.npy", np.array([["0", "1"], ["1", "2"]]))
     with pytest.raises(ValueError, match=r"text\.npy: holds <U1, not numbers"):
         read_path_file(str(tmp_path / "text.npy"))
+    (tmp_path / "empty.npy").write_bytes(b"")
+    with pytest.raises(ValueError, match=r"empty\.npy: not a NumPy \.npy array"):
+        read_path_file(str(tmp_path / "empty.npy"))
     (tmp_path / "junk.npy").write_bytes(b"not an array")
     with pytest.raises(ValueError, match=r"junk\.npy: not a NumPy \.npy array"):
         read_path_file(str(tmp_path / "junk.npy"))

@@ -402,5 +402,6 @@ def test_a_stop_while_the_server_checks_a_path_cuts_it(monkeypatch):
 
     monkeypatch.setattr(dispatcher_module, "check_timed_path", slow_check)
     answer = send(dispatcher, *swing())
-    assert answer.result == Result.INTERRUPTED and "STOP" in answer.reason, answer
+    assert answer.result == Result.INTERRUPTED and "STOP before it started" in answer.reason, answer
+    assert not followed, "the path started after a STOP"
     driver.disconnect()

@@ -579,3 +579,38 @@ def test_ctrl_c_while_the_path_runs_stops_it():
             states, actions, tools, tool_at=lambda moment: None, transport="path", gripper_client=side
         )
     assert side.calls == [("stop",)]
+
+
+def test_a_stop_that_reaches_the_server_before_the_path_is_sent_again():
+    """The replay leaves (its gripper fails at once) while its path is still on the wire: a
+    STOP that finds nothing to stop is repeated until the path answers."""
+    states, actions, tools = _episode()
+    actions[1:, 3] = 1.0  # the gripper closes at frame 1: its moment is 0 with a one-frame lead
+    now = [0.0]
+    arm = _PathArm(now)
+    first_stop, at_server, cut = threading.Event(), threading.Event(), threading.Event()
+    stops = []
+
+    def follow(times, joints):  # reaches the server only after the first STOP went out
+        assert first_stop.wait(5.0), "no STOP at all"
+        at_server.set()
+        assert cut.wait(5.0), "no STOP came once the path was at the server"
+        raise RuntimeError("FOLLOW_PATH: INTERRUPTED by STOP")
+
+    class Side(_Arm):
+        def set_gripper(self, closed):
+            raise RuntimeError("SET_GRIPPER: NOT_CONNECTED")
+
+        def stop(self):
+            stops.append(at_server.is_set())
+            first_stop.set()
+            if stops[-1]:
+                cut.set()
+
+    arm.follow_path = follow
+    side = Side()
+    report = EpisodeReplay(
+        arm, 10.0, lead_s=0.1, clock=lambda: now[0], sleep=lambda s: now.__setitem__(0, now[0] + s), settle_s=0.0
+    ).run(states, actions, tools, tool_at=lambda moment: None, transport="path", gripper_client=side)
+    assert stops[0] is False and stops[-1] is True and cut.is_set()
+    assert report.refused == 1 and "NOT_CONNECTED" in report.reason
