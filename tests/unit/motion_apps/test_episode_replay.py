@@ -573,11 +573,17 @@ def test_ctrl_c_while_the_path_runs_stops_it():
 
     arm.follow_path = follow
     side = Side()
-    threading.Thread(target=interrupt, daemon=True).start()
-    with pytest.raises(KeyboardInterrupt):
-        EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=lambda s: now.__setitem__(0, now[0] + s)).run(
-            states, actions, tools, tool_at=lambda moment: None, transport="path", gripper_client=side
-        )
+    # Python's own SIGINT handler (an earlier test in the process may have installed
+    # rospy's, which swallows the KeyboardInterrupt).
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        threading.Thread(target=interrupt, daemon=True).start()
+        with pytest.raises(KeyboardInterrupt):
+            EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=lambda s: now.__setitem__(0, now[0] + s)).run(
+                states, actions, tools, tool_at=lambda moment: None, transport="path", gripper_client=side
+            )
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert side.calls == [("stop",)]
 
 
