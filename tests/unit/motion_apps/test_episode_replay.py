@@ -514,35 +514,43 @@ def test_a_refused_path_is_reported_at_once_not_at_the_first_gripper_change():
     assert gripper.calls == []
 
 
-def test_a_replay_left_while_its_path_runs_stops_the_path():
-    states, actions, tools = _episode()
-    now = [0.0]
+def _path_cut_by_stop(now):
+    """(a server whose path runs until a STOP on the side connection cuts it, that side, the
+    event set once the path runs)."""
     arm = _PathArm(now)
     running, stopped = threading.Event(), threading.Event()
 
-    def follow(times, joints):  # a path the server follows until a STOP cuts it
+    def follow(times, joints):
         running.set()
-        assert stopped.wait(5.0), "nobody stopped the path"
+        assert stopped.wait(10.0), "nobody stopped the path"
         raise RuntimeError("FOLLOW_PATH: INTERRUPTED by STOP")
 
     class Side(_Arm):
-        def set_gripper(self, closed):
-            raise RuntimeError("SET_GRIPPER: DRIVER_FAULT")
-
         def stop(self):
             self.calls.append(("stop",))
             stopped.set()
+
+    arm.follow_path = follow
+    return arm, Side(), running
+
+
+def test_a_replay_left_while_its_path_runs_stops_the_path():
+    states, actions, tools = _episode()
+    now = [0.0]
+    arm, side, running = _path_cut_by_stop(now)
+
+    def failing_gripper(closed):
+        raise RuntimeError("SET_GRIPPER: DRIVER_FAULT")
 
     def sleep(seconds):
         running.wait(5.0)
         now[0] += seconds
 
-    arm.follow_path = follow
-    side = Side()
+    side.set_gripper = failing_gripper
     report = EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=sleep).run(
         states, actions, tools, tool_at=lambda moment: None, transport="path", gripper_client=side
     )
-    assert side.calls == [("stop",)] and stopped.is_set()
+    assert side.calls == [("stop",)]
     assert report.refused == 1 and "DRIVER_FAULT" in report.reason
 
 
@@ -553,26 +561,13 @@ def test_ctrl_c_while_the_path_runs_stops_it():
     states, actions, tools = _episode()
     actions[:, 3] = 0.0  # no gripper change: the replay goes straight to waiting for the path
     now = [0.0]
-    arm = _PathArm(now)
-    running, stopped = threading.Event(), threading.Event()
-
-    def follow(times, joints):  # the server follows the path until a STOP cuts it
-        running.set()
-        assert stopped.wait(10.0), "nobody stopped the path"
-        raise RuntimeError("FOLLOW_PATH: INTERRUPTED by STOP")
-
-    class Side(_Arm):
-        def stop(self):
-            self.calls.append(("stop",))
-            stopped.set()
+    arm, side, running = _path_cut_by_stop(now)
 
     def interrupt():
         running.wait(10.0)
         time.sleep(0.1)  # the replay is waiting for the path by then
         signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
 
-    arm.follow_path = follow
-    side = Side()
     # Python's own SIGINT handler (an earlier test in the process may have installed
     # rospy's, which swallows the KeyboardInterrupt).
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
