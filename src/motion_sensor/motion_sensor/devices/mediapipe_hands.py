@@ -78,6 +78,10 @@ class MediaPipeHandDetector(HandDetector):
                 min_detection_confidence=min_detection_confidence,
                 min_tracking_confidence=min_tracking_confidence,
             )
+            # The graph opens its calculators on threads of its own after Hands() returns,
+            # and each TFLite delegate prints a notice then: by the end of one frame they
+            # are all open. A blank frame here, still silenced (it seeds no tracking).
+            self._hands.process(np.zeros((64, 64, 3), dtype=np.uint8))
 
     def detect(self, rgb: np.ndarray) -> list[DetectedHand]:
         height, width = rgb.shape[:2]
