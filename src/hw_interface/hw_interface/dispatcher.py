@@ -277,9 +277,7 @@ class CommandDispatcher:
         q = [float(v) for v in joints]
         if not all(map(math.isfinite, q)):
             return Result.NOT_FINITE, f"joints contains NaN or inf: {q}"
-        if self._limit_lists is None:
-            self._limit_lists = tuple(float_list(limits) for limits in self.driver.joint_limits)
-        lower, upper = self._limit_lists
+        lower, upper = self._joint_limit_lists()
         outside = [i for i, (v, low, high) in enumerate(zip(q, lower, upper)) if v < low or v > high]
         if outside:
             names = [self.driver.joint_names[i] for i in outside]
@@ -312,6 +310,12 @@ class CommandDispatcher:
                 )
         return None
 
+    def _joint_limit_lists(self):
+        """The driver's (lower, upper) joint limits as lists, read once per login."""
+        if self._limit_lists is None:
+            self._limit_lists = tuple(float_list(limits) for limits in self.driver.joint_limits)
+        return self._limit_lists
+
     def _check_path(self, times, joints) -> TimedPath:
         """The request's timed path, checked against the driver's limits (raises the refusal)."""
         limits = self.driver.path_limits()
@@ -322,9 +326,7 @@ class CommandDispatcher:
                 "stream the path with SET_JOINTS instead",
                 Result.NOT_SUPPORTED,
             )
-        if self._limit_lists is None:
-            self._limit_lists = tuple(float_list(limits) for limits in self.driver.joint_limits)
-        return check_timed_path(times, joints, self.driver.joint_names, self._limit_lists, limits[0], limits[1])
+        return check_timed_path(times, joints, self.driver.joint_names, self._joint_limit_lists(), limits[0], limits[1])
 
     def _note_stream(self, target: np.ndarray | None) -> None:
         """Remember the last accepted streamed target (None: the stream was broken off)."""
@@ -425,7 +427,7 @@ class CommandDispatcher:
                         Result.TOO_FAR,
                     )
                 # The first command is where the arm is: the path eases onto its first sample.
-                check_path_start(path, current, driver.joint_names, self._limit_lists, *driver.path_limits())
+                check_path_start(path, current, driver.joint_names, self._joint_limit_lists(), *driver.path_limits())
                 # The move timeout counts from the path's end: a path may be longer than it.
                 return (), driver.follow_path(path, timeout=path.duration + self.move_timeout)
             finally:
