@@ -589,15 +589,13 @@ class PybulletSimDriver(UrdfModelMixin, SimulatedScene, RobotDriver):
                     elapsed = self._sim_time - self._path_start
                     if self._path_started is None:  # this step applies the path's time 0
                         self._path_started = (next_tick + to_wall) if self.real_time else time.time()
+                    self._target = self._path.sample(elapsed)
                     if isinstance(self._path, TimedPath):
                         # Position and velocity setpoints, as a trajectory controller's: with
                         # the path's speed fed forward the arm is on the path at its times
                         # (within 0.06 mrad on a 0.5 Hz, 0.5 rad swing) instead of trailing
                         # it by the position servo's lag (3.3 ms, 5 mrad on that swing).
-                        self._target = self._path.sample(elapsed)
                         feedforward = self._path.velocity(elapsed).tolist()
-                    else:
-                        self._target = self._path.sample(elapsed)
                     if elapsed >= self._path.duration:
                         error = self._goal_error()
                         if error <= self.goal_tolerance:
