@@ -30,6 +30,8 @@ Its modules, by role:
   service);
 - ``path_file``: a timed joint path read and checked from a CSV or ``.npy`` file, for
   ``motion_controller_client follow_path``;
+- ``path_call``: ``PathCall``, a FOLLOW_PATH call on a thread of its own that a caller
+  leaving early STOPs until it answers (the client's ``follow_path``, the episode replay);
 - ``errors``: ``HwInterfaceError``;
 - ``testing``: test doubles (the fake UR controller, the simulated simple_message
   controller), injected by registry name and
@@ -69,6 +71,7 @@ _PUBLIC = {
     "SERVER_PARAMETERS": "server_params",
     "check_server_params": "server_params",
     "MotionControllerClient": "controller_client",
+    "PathCall": "path_call",
     "HwInterfaceError": "errors",
 }
 __all__ = list(_PUBLIC)

@@ -64,6 +64,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hw_interface.path_call import PathCall
 from hw_interface.protocol import Result
 
 __all__ = ["EpisodeReplay", "ReplayReport", "LEAD_CHANGE_S"]
@@ -323,17 +324,7 @@ class EpisodeReplay:
         the path."""
         dof = len(targets[0])
         times = [step * step_s for step in range(len(targets))]
-        outcome = {}
-        finished = threading.Event()
-
-        def follow():
-            try:
-                outcome["started"] = self.client.follow_path(times, [[float(v) for v in t] for t in targets])
-            except Exception as exc:  # noqa: BLE001 - handed to the caller's thread
-                outcome["error"] = exc
-            finally:
-                finished.set()
-
+        call = PathCall(self.client.follow_path, times, [[float(v) for v in t] for t in targets])
         changes = []
         for frame in range(1, len(actions)):
             closed = bool(actions[frame, dof] > 0.5)
@@ -341,41 +332,22 @@ class EpisodeReplay:
                 changes.append((max(frame * self.period - lead_s, 0.0), closed))
                 gripper = closed
         side = gripper_client or self.client
-        thread = threading.Thread(target=follow, name="replay-path", daemon=True)
-        launched = False
         try:
             sent_at = self.clock()
-            launched = True  # before start(): a Ctrl-C between the two must still STOP
-            thread.start()
+            call.start()
             for moment, closed in changes:
-                self._wait_until(sent_at + moment, finished)
-                if "error" in outcome:  # refused or cut short: the gripper stays as it is
+                self._wait_until(sent_at + moment, call.finished)
+                if call.failed:  # refused or cut short: the gripper stays as it is
                     break
                 side.set_gripper(closed)
-            # An Event, not Thread.join: Python 3.11.2's join, interrupted by Ctrl-C, marks the
-            # thread stopped while it still waits for the path (is_alive() then lies).
-            finished.wait()
+            call.finished.wait()
         except BaseException:
             # Leaving while the arm follows the path (a gripper error, Ctrl-C): the server
             # would follow it to its end for nobody. STOP it, on the side connection.
-            # The path may not have reached the server yet (60000 samples take tens of ms on
-            # the wire) and a first STOP would find nothing to stop: STOP again until the
-            # path answers (only then: a STOP after it ended could stop another's motion).
-            deadline = time.monotonic() + 5.0
-            while launched and not finished.is_set():
-                try:
-                    side.stop()
-                except Exception as exc:  # noqa: BLE001 - the reason we are leaving is the one to raise
-                    self.log(f"replay_episode: could not STOP the path ({exc}); the server follows it to its end")
-                    break
-                if finished.wait(0.2) or time.monotonic() > deadline:
-                    break
+            call.stop_until_answered(side.stop, lambda message: self.log(f"replay_episode: {message}"))
             raise
-        thread.join()
-        if "error" in outcome:
-            raise outcome["error"]
+        started = call.result()
         report.transport = "path"
-        started = outcome["started"]
         pending = [(i, started + i * self.period) for i in range(1, len(actions))]
         deadline = self.clock() + 1.0  # the last moments' tool poses are still on their way
         pending = self._measure(pending, tool_at, tool_poses, report)
