@@ -6,11 +6,14 @@ interrupted by Ctrl-C, marks the thread stopped while it still waits for the pat
 (``is_alive()`` then lies), and an Event does not.
 
 A caller that leaves early (Ctrl-C, an error of its own) calls ``stop_until_answered``.
-One STOP is not enough: a long path takes tens of milliseconds on the wire and about 0.1 s
-to check (60000 samples), and a STOP that arrives before the server has the path finds
-nothing to stop; the path then runs to its end. So STOP goes out again every ``every_s``
-until the path's call answers, and never after it answered: a STOP then could stop
-another client's motion. ``most_s`` bounds the wait for a server that does not answer.
+One STOP is not enough: a long path takes tens of milliseconds on the wire, and a STOP
+that arrives before the server has the path finds nothing to stop; the path then runs to
+its end (one that arrives while the server checks the path keeps it from starting). So
+STOP goes out again every ``every_s`` until the path's call answers, and never after it
+answered: a STOP stops all motion on the server, whoever sent it, so one sent then could
+stop another client's move (as one sent while the path is still on the wire can).
+``most_s`` bounds the wait for a server that does not answer; a STOP call that hangs is
+not bounded by it.
 
 Plain Python: the service call and the STOP are callables (``MotionControllerClient``'s
 ``follow_path`` and ``stop`` in the nodes, stand-ins in the tests).
@@ -65,19 +68,32 @@ class PathCall:
 
     def stop_until_answered(self, stop, log, every_s: float = 0.2, most_s: float = 5.0) -> int:
         """STOP the path (``stop()``) every ``every_s`` until its call answered, for at
-        most ``most_s``; the number of STOPs sent. A STOP that fails is logged (``log``)
-        and ends the attempt: the server then follows the path to its end."""
+        most ``most_s``; the number of STOPs that went out. A STOP that fails is logged
+        (``log``) and ends the attempt. A further Ctrl-C meanwhile does not end it: the
+        user pressing it again is the user who wants the arm stopped. What became of the
+        path is ``describe()``'s."""
         if not self.started:
             return 0
         sent = 0
         deadline = self._clock() + most_s
-        while not self.finished.is_set():
+        while not self.finished.is_set() and self._clock() <= deadline:
             try:
                 stop()
+                sent += 1
+                self.finished.wait(every_s)
+            except KeyboardInterrupt:
+                log(f"still stopping the path (at most {most_s:g} s)")
             except Exception as exc:  # noqa: BLE001 - the caller's own reason to leave is the one it raises
-                log(f"could not STOP the path ({exc}); the server follows it to its end")
-                break
-            sent += 1
-            if self.finished.wait(every_s) or self._clock() > deadline:
+                log(f"could not STOP the path ({exc})")
                 break
         return sent
+
+    def describe(self) -> str:
+        """What became of the path, for the user of a call left early."""
+        if not self.started:
+            return "no path was sent"
+        if not self.finished.is_set():
+            return "the path did not answer: the server may follow it to its end"
+        if "error" in self._outcome:
+            return f"the path answered: {self._outcome['error']}"
+        return "the path had already ended"

@@ -345,6 +345,8 @@ class EpisodeReplay:
             # Leaving while the arm follows the path (a gripper error, Ctrl-C): the server
             # would follow it to its end for nobody. STOP it, on the side connection.
             call.stop_until_answered(side.stop, lambda message: self.log(f"replay_episode: {message}"))
+            if not call.finished.is_set():
+                self.log(f"replay_episode: {call.describe()}")
             raise
         started = call.result()
         report.transport = "path"
