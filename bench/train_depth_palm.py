@@ -4,7 +4,8 @@ exports it to ONNX: src/motion_sensor/data/depth_palm.onnx and depth_palm.json.
 Data, on the TUNING subjects only of the depth hand bench's split (bench/shrec_hands.py,
 ``select(data, seed=28, per_subject=2)``; the held-out subjects are never read):
 ``--per-subject`` SHREC'17 training sequences of each tuning subject (the bench's own two
-among them), seeded, rendered by motion_sensor.testing.skeleton_depth with its sensor noise;
+among them; the default 100 takes every one, 880 in all), seeded, rendered by
+motion_sensor.testing.skeleton_depth with its sensor noise;
 and ``--synthetic`` paths of the parametric hand (motion_sensor.testing.synthetic_depth,
 path seeds 101.., none the bench's seed 1), so the network is not fitted to one renderer;
 and ``--varied`` more renders of each of those tuning sequences on a varied hand
@@ -25,12 +26,12 @@ too) and prints, on their bench sequences, the tracker's per-sequence aligned pa
 and without the correction (how the settings were chosen; also at other weights), and on
 all their unvaried and their varied sequences; no model is written then.
 
-Run: nice -n 10 bench/run train_depth_palm [--per-subject 16] [--synthetic 6] [--varied 2]
-[--epochs 30] [--cache FILE] [--validate-subjects LIST]. Single-threaded; about 8 min (6
-rendering and tracking, 12675 frames). ``--varied 2`` nearly triples the frames (34418): 18
-min rendering and tracking on a shared machine and about 9 s of CPU an epoch per 17000
-training frames (some 18 min for two networks on all of them); ``--cache`` keeps the tracked
-frames for further runs (a cache of more varied copies serves a run that asks for fewer).
+Run: nice -n 10 bench/run train_depth_palm [--per-subject 100] [--synthetic 6] [--varied 2]
+[--epochs 30] [--cache FILE] [--validate-subjects LIST]. Single-threaded; about 35 min on a
+machine shared with one other job: 16 rendering and tracking (59333 frames; 3 min for the
+12675 of ``--per-subject 16``), then about 8 min a network. ``--varied 2`` adds two varied
+frames for each unvaried one; ``--cache`` keeps the tracked frames for further runs (a cache
+of more varied copies serves a run that asks for fewer).
 """
 
 import argparse
@@ -327,7 +328,9 @@ def export(net, path):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--per-subject", type=int, default=16, help="SHREC sequences per tuning subject")
+    parser.add_argument(
+        "--per-subject", type=int, default=100, help="SHREC sequences per tuning subject (100: all of them)"
+    )
     parser.add_argument("--synthetic", type=int, default=6, help="synthetic hand paths of 300 frames")
     parser.add_argument(
         "--varied", type=int, default=0, help="varied-hand copies of each tuning sequence (testing.varied_hands)"

@@ -119,7 +119,8 @@ def palm_rms(sequence, frames_used, palm_model):
 
 def test_the_model_holds_the_palm_of_a_held_out_subject():
     """Subject 22's second expand gesture, its palm tilted away: the tracker's own estimate
-    is 13.3 mm RMS over these 40 frames, the shipped model's correction 7.2."""
+    is 13.3 mm RMS over these 40 frames, the shipped model's correction 4.7 (7.2 for the
+    model trained on 16 sequences a subject, which this bound fails)."""
     without, with_model = palm_rms(37, 40, False), palm_rms(37, 40, True)
     assert without > 0.011, f"{without * 1000:.1f} mm RMS without the model"
-    assert with_model < 0.0095, f"{with_model * 1000:.1f} mm RMS with the model"
+    assert with_model < 0.0065, f"{with_model * 1000:.1f} mm RMS with the model"

@@ -130,12 +130,13 @@ TRACKER_PARAMS = ParamSchema(
         ),
         Param(
             "palm_model_max_offset_m",
-            0.05,
+            0.12,
             unit="m",
             low=0,
             low_open=True,
             high=0.15,
-            doc="a correction that would move the palm further than this is implausible: the estimate stands",
+            doc="a correction that would move the palm further than this (0.12: outside the network's crop) is "
+            "implausible: the estimate stands",
         ),
         Param(
             "palm_model_weight",

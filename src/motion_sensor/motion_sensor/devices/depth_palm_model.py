@@ -136,7 +136,7 @@ class PalmModel:
     """The exported network (input ``crop`` (n, 2, CROP_PX, CROP_PX), output ``offset``
     (n, 3)), single-threaded on the CPU."""
 
-    def __init__(self, model_path: str | None = None, max_offset_m: float = 0.05, weight: float = 1.0):
+    def __init__(self, model_path: str | None = None, max_offset_m: float = 0.12, weight: float = 1.0):
         self.model_path = os.path.normpath(model_path or DEFAULT_MODEL)
         self.max_offset_m = float(max_offset_m)
         self.weight = float(weight)
