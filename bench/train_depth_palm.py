@@ -4,7 +4,8 @@ exports it to ONNX: src/motion_sensor/data/depth_palm.onnx and depth_palm.json.
 Data, on the TUNING subjects only of the depth hand bench's split (bench/shrec_hands.py,
 ``select(data, seed=28, per_subject=2)``; the held-out subjects are never read):
 ``--per-subject`` SHREC'17 training sequences of each tuning subject (the bench's own two
-among them; the default 100 takes every one, 880 in all), seeded, rendered by
+among them; the default 100 takes 880 of their 1010: all of six subjects' and 100 of each of
+the other four's), seeded, rendered by
 motion_sensor.testing.skeleton_depth with its sensor noise;
 and ``--synthetic`` paths of the parametric hand (motion_sensor.testing.synthetic_depth,
 path seeds 101.., none the bench's seed 1), so the network is not fitted to one renderer;
@@ -328,9 +329,7 @@ def export(net, path):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument(
-        "--per-subject", type=int, default=100, help="SHREC sequences per tuning subject (100: all of them)"
-    )
+    parser.add_argument("--per-subject", type=int, default=100, help="SHREC sequences per tuning subject, at most")
     parser.add_argument("--synthetic", type=int, default=6, help="synthetic hand paths of 300 frames")
     parser.add_argument(
         "--varied", type=int, default=0, help="varied-hand copies of each tuning sequence (testing.varied_hands)"

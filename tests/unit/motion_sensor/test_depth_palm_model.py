@@ -5,7 +5,7 @@ not trained on (SHREC'17 slice, subject 22: a held-out subject of the depth benc
 import numpy as np
 import pytest
 
-from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY, DepthHandTracker
+from motion_sensor.devices.depth_hand import OPTICAL_TO_BODY, TRACKER_PARAMS, DepthHandTracker
 from motion_sensor.devices.depth_palm_model import CROP_PX, PalmModel, crop_window, palm_crop
 from motion_sensor.errors import MotionSensorError
 from motion_sensor.testing.skeleton_depth import PALM, place_in_view, render_skeleton
@@ -55,10 +55,14 @@ def test_no_crop_when_the_blob_is_elsewhere():
     assert palm_crop(z, top, left, far, INTR) is None
 
 
+#: The tracker's own bound on a correction (palm_model_max_offset_m).
+DEFAULT_BOUND = TRACKER_PARAMS.defaults()["palm_model_max_offset_m"]
+
+
 class FixedModel(PalmModel):
     """The shipped model's checks with a chosen output."""
 
-    def __init__(self, offset, max_offset_m=0.05):
+    def __init__(self, offset, max_offset_m=DEFAULT_BOUND):
         super().__init__(max_offset_m=max_offset_m)
         self.fixed = np.asarray(offset, float)
 
@@ -68,8 +72,15 @@ class FixedModel(PalmModel):
 
 @pytest.mark.parametrize(
     "offset, kept",
-    [([0.0, 0.01, 0.0], True), ([0.0, 0.2, 0.0], False), ([np.nan, 0.0, 0.0], False)],
-    ids=["plausible", "too far", "not finite"],
+    [
+        ([0.0, 0.01, 0.0], True),
+        # A palm tilted well away can be 5-12 cm from the estimate: the bound was 5 cm and
+        # threw away the corrections those frames needed most.
+        ([0.0, 0.09, 0.0], True),
+        ([0.0, 0.13, 0.0], False),
+        ([np.nan, 0.0, 0.0], False),
+    ],
+    ids=["plausible", "large", "outside the crop", "not finite"],
 )
 def test_an_implausible_output_falls_back_to_the_estimate(offset, kept):
     z, top, left = blob_at()

@@ -135,7 +135,7 @@ TRACKER_PARAMS = ParamSchema(
             low=0,
             low_open=True,
             high=0.15,
-            doc="a correction that would move the palm further than this (0.12: outside the network's crop) is "
+            doc="a network's palm further than this from the estimate (0.12: the crop's half side) is "
             "implausible: the estimate stands",
         ),
         Param(
