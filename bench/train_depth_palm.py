@@ -5,8 +5,8 @@ Data, on the TUNING subjects only of the depth hand bench's split (bench/shrec_h
 ``select(data, seed=28, per_subject=2)``; the held-out subjects are never read):
 ``--per-subject`` SHREC'17 training sequences of each tuning subject (the bench's own two
 among them; the default 100 takes 880 of their 1010: all of six subjects' and 100 of each of
-the other four's), seeded, rendered by
-motion_sensor.testing.skeleton_depth with its sensor noise;
+the other four's), seeded, rendered by motion_sensor.testing.skeleton_depth with its sensor
+noise;
 and ``--synthetic`` paths of the parametric hand (motion_sensor.testing.synthetic_depth,
 path seeds 101.., none the bench's seed 1), so the network is not fitted to one renderer;
 and ``--varied`` more renders of each of those tuning sequences on a varied hand
@@ -30,7 +30,7 @@ all their unvaried and their varied sequences; no model is written then.
 Run: nice -n 10 bench/run train_depth_palm [--per-subject 100] [--synthetic 6] [--varied 2]
 [--epochs 30] [--cache FILE] [--validate-subjects LIST]. Single-threaded; about 35 min on a
 machine shared with one other job: 16 rendering and tracking (59333 frames; 3 min for the
-12675 of ``--per-subject 16``), then about 8 min a network. ``--varied 2`` adds two varied
+12675 of ``--per-subject 16``), then 6-8 min a network. ``--varied 2`` adds two varied
 frames for each unvaried one; ``--cache`` keeps the tracked frames for further runs (a cache
 of more varied copies serves a run that asks for fewer).
 """
