@@ -404,18 +404,17 @@ class CommandDispatcher:
         elif command == CommandIndex.FOLLOW_PATH:
             if not self._blocking_motion.acquire(blocking=False):
                 raise HwInterfaceError("another MOVE_J/MOVE_L/FOLLOW_PATH is running; wait or send STOP", Result.BUSY)
-            with self._stream_lock:
-                streaming = self._clock() - self._stream_time <= STREAM_REFERENCE_TIMEOUT
-            if streaming:  # the easing onto the path starts from rest, not from a moving arm
-                self._blocking_motion.release()
-                raise HwInterfaceError(
-                    "FOLLOW_PATH refused: a SET_JOINTS stream moved the arm in the last "
-                    f"{STREAM_REFERENCE_TIMEOUT:g} s; a path starts from an arm at rest: "
-                    "let the stream end, or STOP, first",
-                    Result.BUSY,
-                )
-            self._note_stream(None)
             try:
+                with self._stream_lock:
+                    streaming = self._clock() - self._stream_time <= STREAM_REFERENCE_TIMEOUT
+                if streaming:  # the easing onto the path starts from rest, not from a moving arm
+                    raise HwInterfaceError(
+                        "FOLLOW_PATH refused: a SET_JOINTS stream moved the arm in the last "
+                        f"{STREAM_REFERENCE_TIMEOUT:g} s; a path starts from an arm at rest: "
+                        "let the stream end, or STOP, first",
+                        Result.BUSY,
+                    )
+                self._note_stream(None)
                 current = np.asarray(driver.get_robot_joints(), dtype=float)
                 gap = np.abs(path.start - current)
                 if gap.max() > self.stream_start_tolerance:
