@@ -48,7 +48,13 @@ their frames' moments, the actions that recorded lag late). The tool is measured
 afterwards at the path's start (the server's stamp) plus each frame's time. The gripper
 changes go out meanwhile on ``gripper_client`` (a second connection: the path blocks its
 own). A server whose driver cannot follow a path (NOT_SUPPORTED) gets the stream instead,
-and ``log`` says so.
+and ``log`` says so. A timed path starts and ends at rest, but an episode may begin or end
+in motion (recording started or stopped while the arm moved): the path then gets a run-up,
+from rest at constant acceleration (``ramp_acceleration``) onto the first frame's velocity,
+and a run-out, from the last frame's velocity to rest, past the episode's ends; the arm is
+MOVE_J'd to the run-up's start. Without them the driver would have to reach the first
+frame's speed within one 10 ms sample (0.65 rad/s takes 260 rad/s^2, over a driver's 200),
+and it refuses such a path whole.
 
 The lag that matters is the REPLAYING arm's behind its stream, not the recorded one's: with
 ``stream_lag`` (a ``StreamLag`` fed by the caller with the arm's stamped joint samples) the
@@ -67,11 +73,15 @@ import numpy as np
 from hw_interface.path_call import PathCall
 from hw_interface.protocol import Result
 
-__all__ = ["EpisodeReplay", "ReplayReport", "LEAD_CHANGE_S"]
+__all__ = ["EpisodeReplay", "ReplayReport", "LEAD_CHANGE_S", "RAMP_ACCELERATION"]
 
 #: The most the stream's lead moves toward a measured lag in one step (s): 0.1 ms a 10 ms
 #: step, the targets' time running 1 % fast or slow while it moves (2 mm of lead in 0.2 s).
 LEAD_CHANGE_S = 0.0001
+#: rad/s^2: the acceleration of a timed path's run-up and run-out (the module's docstring):
+#: 5 % of the drivers' 200, leaving the cubic between samples room; 0.65 rad/s is reached
+#: in 65 ms over 0.021 rad.
+RAMP_ACCELERATION = 10.0
 
 
 @dataclass
@@ -88,6 +98,8 @@ class ReplayReport:
     lead_ms_start: float = 0.0  # ... at the start (the recorded lag plus lead_s)
     lag_measured: bool = False  # the lead came from the replaying arm's measured lag
     transport: str = "stream"  # what ran: "stream" (SET_JOINTS) or "path" (FOLLOW_PATH)
+    run_up_ms: float = 0.0  # a path's run-up from rest onto the first frame's velocity (ms)
+    run_out_ms: float = 0.0  # ... and its run-out from the last frame's velocity to rest
 
     def add(self, frame: int, error_mm: float) -> None:
         if not self.tool_error_mm or error_mm > max(self.tool_error_mm):
@@ -118,6 +130,8 @@ class ReplayReport:
             "stream_lead_ms_start": round(self.lead_ms_start, 2),
             "lag_measured": self.lag_measured,
             "transport": self.transport,
+            "run_up_ms": round(self.run_up_ms, 1),
+            "run_out_ms": round(self.run_out_ms, 1),
         }
 
 
@@ -135,6 +149,7 @@ class EpisodeReplay:
         settle_s: float = 0.5,
         lead_s: float = 0.0,
         log=print,
+        ramp_acceleration: float = RAMP_ACCELERATION,
     ):
         self.client = client
         self.period = 1.0 / fps
@@ -144,6 +159,9 @@ class EpisodeReplay:
         self.settle_s = settle_s
         self.lead_s = float(lead_s)
         self.log = log
+        if not ramp_acceleration > 0.0:
+            raise ValueError(f"ramp_acceleration {ramp_acceleration!r}: a positive rad/s^2")
+        self.ramp_acceleration = float(ramp_acceleration)
 
     @staticmethod
     def catmull_rom_tangents(targets: np.ndarray) -> np.ndarray:
@@ -219,10 +237,6 @@ class EpisodeReplay:
             raise ValueError("a replay through the recorded joints needs their measured velocities")
         report = ReplayReport(frames=len(actions))
         dof = states.shape[1] - 1
-        self.client.move_j([float(v) for v in states[0, :dof]])
-        gripper = bool(states[0, dof] > 0.5)
-        self.client.set_gripper(gripper)
-        self.sleep(self.settle_s)
         joints = np.asarray((states if through_states else actions)[:, :dof], dtype=np.float64)
         if velocities is None:
             tangents = self.catmull_rom_tangents(joints)
@@ -232,6 +246,7 @@ class EpisodeReplay:
                 raise ValueError(f"velocities of shape {np.shape(velocities)} for {joints.shape} joint targets")
         steps = (len(actions) - 1) * self.substeps  # the stream's last step: the last frame's targets
         step_s = self.period / self.substeps
+        start = np.asarray(states[0, :dof], dtype=np.float64)
         if transport == "path":
             measured = measured_velocities if measured_velocities is not None else velocities
             # The driver feeds the path's velocity forward: the arm is on it at its times,
@@ -241,10 +256,31 @@ class EpisodeReplay:
             lead_s = self.lead_s - lag
             report.lead_ms = report.lead_ms_start = 1000.0 * lead_s
             lead = round(lead_s / step_s, 9)
-            targets = [self._target(joints, tangents, step, lead, steps) for step in range(steps + 1)]
+            ramps = self._ramps(tangents, step_s)
+            report.run_up_ms, report.run_out_ms = (1000.0 * step_s * r for r in ramps)
+            # Path sample k is the curve ``first`` steps before frame 0's step: from rest at
+            # the run-up's start (or before it) to rest at the run-out's end (or after it).
+            first = int(np.ceil(ramps[0] + max(lead, 0.0) - 1e-9))
+            last = int(np.ceil(steps + ramps[1] - lead + first - 1e-9))
+            targets = [self._target(joints, tangents, k - first, lead, steps, ramps) for k in range(last + 1)]
+            start = targets[0]
+        self.client.move_j([float(v) for v in start])
+        gripper = bool(states[0, dof] > 0.5)
+        self.client.set_gripper(gripper)
+        self.sleep(self.settle_s)
+        if transport == "path":
             try:
                 return self._follow(
-                    report, targets, step_s, lead_s, actions, tool_poses, tool_at, gripper, gripper_client
+                    report,
+                    targets,
+                    step_s,
+                    first * step_s,
+                    lead_s,
+                    actions,
+                    tool_poses,
+                    tool_at,
+                    gripper,
+                    gripper_client,
                 )
             except Exception as exc:  # noqa: BLE001 - NOT_SUPPORTED falls back, any other refusal is reported
                 if getattr(exc, "result", None) != Result.NOT_SUPPORTED:
@@ -252,6 +288,10 @@ class EpisodeReplay:
                     report.reason = f"path: {exc}"
                     return report
                 self.log(f"replay_episode: the server cannot follow a timed path ({exc}): streaming SET_JOINTS instead")
+                report.run_up_ms = report.run_out_ms = 0.0
+                if ramps[0] > 0.0:  # the arm waits at the run-up's start: the stream begins at the first frame
+                    self.client.move_j([float(v) for v in states[0, :dof]])
+                    self.sleep(self.settle_s)
         lead_s = self.lead_s + (self.recorded_lag(states, actions, velocities) if through_states else 0.0)
         report.lead_ms = report.lead_ms_start = 1000.0 * lead_s
         follow_lag = stream_lag is not None and through_states
@@ -305,10 +345,28 @@ class EpisodeReplay:
         report.unmeasured = len(pending)
         return report
 
-    def _target(self, joints, tangents, step, lead, steps) -> np.ndarray:
+    def _ramps(self, tangents: np.ndarray, step_s: float) -> tuple[float, float]:
+        """(run-up, run-out) in steps: the time, at ``ramp_acceleration``, from rest to the
+        first frame's velocity and from the last frame's velocity to rest (its fastest joint)."""
+        up, down = (float(np.max(np.abs(tangents[i]))) / self.period / self.ramp_acceleration for i in (0, -1))
+        return up / step_s, down / step_s
+
+    def _target(self, joints, tangents, step, lead, steps, ramps=None) -> np.ndarray:
         """The curve's target at ``step`` run ``lead`` steps ahead (the first frame's before
-        the start; past the last frame, on along its tangent)."""
-        ahead = min(max(step + lead, 0.0), steps)
+        the start; past the last frame, on along its tangent). With ``ramps`` (run-up and
+        run-out steps): before the first frame, the run-up at constant acceleration from rest
+        onto the first frame's velocity; past the last frame, the run-out to rest."""
+        ahead = step + lead
+        if ramps is not None and (ahead < 0.0 or ahead > steps):
+            before = ahead < 0.0
+            ramp = ramps[0] if before else ramps[1]
+            velocity = (tangents[0] if before else tangents[-1]) / self.substeps  # a change per step
+            if ramp <= 0.0:
+                return (joints[0] if before else joints[-1]).copy()
+            tau = max(ahead, -ramp) if before else min(ahead - steps, ramp)  # steps from the frame
+            sign = 1.0 if before else -1.0
+            return (joints[0] if before else joints[-1]) + velocity * (tau + sign * tau * tau / (2.0 * ramp))
+        ahead = min(max(ahead, 0.0), steps)
         frame = int(ahead // self.substeps)
         part = (ahead - frame * self.substeps) / self.substeps
         target = self._curve(joints, tangents, frame, part) if part else joints[frame]
@@ -316,12 +374,12 @@ class EpisodeReplay:
             target = joints[-1] + tangents[-1] * ((step + lead - steps) / self.substeps)
         return target
 
-    def _follow(self, report, targets, step_s, lead_s, actions, tool_poses, tool_at, gripper, gripper_client):
-        """The curve as one timed path; the gripper set meanwhile where the actions change it
-        (at their frame's moment counted from when the path was sent, on the replay's clock:
-        the path's start comes later by the service call's latency); then each frame's tool
-        at the path's start plus the frame's time. Leaving early (an error, Ctrl-C) STOPs
-        the path."""
+    def _follow(self, report, targets, step_s, offset_s, lead_s, actions, tool_poses, tool_at, gripper, gripper_client):
+        """The curve as one timed path whose frame 0 is ``offset_s`` after its start (its
+        run-up); the gripper set meanwhile where the actions change it (at their frame's
+        moment counted from when the path was sent, on the replay's clock: the path's start
+        comes later by the service call's latency); then each frame's tool at the path's
+        start plus the frame's time. Leaving early (an error, Ctrl-C) STOPs the path."""
         dof = len(targets[0])
         times = [step * step_s for step in range(len(targets))]
         call = PathCall(self.client.follow_path, times, [[float(v) for v in t] for t in targets])
@@ -329,7 +387,7 @@ class EpisodeReplay:
         for frame in range(1, len(actions)):
             closed = bool(actions[frame, dof] > 0.5)
             if closed != gripper:
-                changes.append((max(frame * self.period - lead_s, 0.0), closed))
+                changes.append((offset_s + max(frame * self.period - lead_s, 0.0), closed))
                 gripper = closed
         side = gripper_client or self.client
         try:
@@ -350,7 +408,7 @@ class EpisodeReplay:
             raise
         started = call.result()
         report.transport = "path"
-        pending = [(i, started + i * self.period) for i in range(1, len(actions))]
+        pending = [(i, started + offset_s + i * self.period) for i in range(1, len(actions))]
         deadline = self.clock() + 1.0  # the last moments' tool poses are still on their way
         pending = self._measure(pending, tool_at, tool_poses, report)
         while pending and self.clock() < deadline:

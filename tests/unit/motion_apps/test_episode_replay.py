@@ -10,6 +10,7 @@ import time
 import numpy as np
 import pytest
 
+from hw_interface.timed_path import TimedPath, check_timed_path
 from motion_apps.episode_replay import EpisodeReplay
 from motion_apps.episode_report import (
     dataset_size_bytes,
@@ -445,7 +446,10 @@ def test_a_replay_over_a_timed_path_is_not_bent_by_a_stalled_client():
     assert summary["transport"] == "path" and len(arm.paths) == 1 and summary["compared"] == len(states) - 1
     times, joints = arm.paths[0]
     np.testing.assert_allclose(np.diff(times), 0.01)
-    np.testing.assert_allclose(joints[::10], states[:, :3], atol=1e-9)  # the recorded joints at their frames
+    first = int(np.argmin(np.linalg.norm(joints[:20] - states[0, :3], axis=1)))  # after the run-up
+    assert first > 0 and report.run_up_ms > 0.0  # the episode starts in motion
+    # the recorded joints at their frames
+    np.testing.assert_allclose(joints[first::10][: len(states)], states[:, :3], atol=1e-9)
     assert summary["tool_error_mm_max"] < 0.01
     streamed = _lagging_replay(states, actions, tools, 0.012, velocities, through_states=True, stall_s=0.06, hold=True)
     assert streamed["transport"] == "stream" and streamed["tool_error_mm_max"] > 5.0
@@ -615,3 +619,86 @@ def test_a_stop_that_reaches_the_server_before_the_path_is_sent_again():
     ).run(states, actions, tools, tool_at=lambda moment: None, transport="path", gripper_client=side)
     assert stops[0] is False and stops[-1] is True and cut.is_set()
     assert report.refused == 1 and "NOT_CONNECTED" in report.reason
+
+
+def _moving_episode(n=20, speed=0.65, fps=10.0):
+    """An episode recorded while the arm moved: three joints at ``speed`` rad/s from its
+    first frame to its last, the gripper open; (states, actions, velocities, tools)."""
+    t = np.arange(n) / fps
+    joints = np.stack([0.1 + speed * t, -0.5 - 0.5 * speed * t, np.full(n, 0.3)], axis=1)
+    states = actions = np.hstack([joints, np.zeros((n, 1))])
+    velocities = np.hstack([np.tile([speed, -0.5 * speed, 0.0], (n, 1)), np.zeros((n, 1))])
+    tools = np.hstack([joints, np.tile([0, 0, 0, 1], (n, 1))])
+    return states, actions, velocities, tools
+
+
+class _CheckingPathArm(_PathArm):
+    """A _PathArm whose driver checks the path as the server does (joint limits, speed 3
+    rad/s, acceleration 200 rad/s^2), refusing it whole."""
+
+    def follow_path(self, times, joints):
+        names = ["a", "b", "c"]
+        check_timed_path(times, joints, names, ([-6.0] * 3, [6.0] * 3), 3.0, 200.0)
+        return super().follow_path(times, joints)
+
+
+def test_an_episode_that_starts_and_ends_in_motion_gets_a_run_up_and_a_run_out():
+    """Recording began and ended while the arm moved at 0.65 rad/s. A timed path starts and
+    ends at rest: straight onto the first frame's speed it needs 260 rad/s^2 in its first
+    10 ms, and the driver refuses it. The replay runs up from rest onto that speed, and out
+    to rest, at 10 rad/s^2; the frames are still measured at their moments."""
+    states, actions, velocities, tools = _moving_episode()
+    now = [0.0]
+    arm = _CheckingPathArm(now)
+    replay = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=lambda: now[0], sleep=_stalling(now), settle_s=0.0)
+    report = replay.run(
+        states, actions, tools, tool_at=arm.tool_at, velocities=velocities, through_states=True, transport="path"
+    )
+    summary = report.summary()
+    assert summary["refused"] == 0, summary["reason"]
+    assert summary["compared"] == len(states) - 1 and summary["tool_error_mm_max"] < 0.01
+    assert summary["run_up_ms"] == pytest.approx(65.0) and summary["run_out_ms"] == pytest.approx(65.0)
+    times, joints = arm.paths[0]
+    np.testing.assert_allclose(arm.calls[0][1], joints[0])  # MOVE_J to the run-up's start
+    # 0.65 rad/s over 65 ms from rest: 21 mm (rad) before the first frame, and after the last.
+    np.testing.assert_allclose(joints[0, 0], states[0, 0] - 0.65 * 0.065 / 2, atol=1e-9)
+    np.testing.assert_allclose(joints[-1, 0], states[-1, 0] + 0.65 * 0.065 / 2, atol=1e-9)
+    _, accelerations = TimedPath(times, joints).peaks()
+    assert accelerations.max() < 40.0  # the cubic between 10 ms samples of a 10 rad/s^2 ramp
+
+    # Without the run-up the same path is refused, with the reason the driver gives.
+    strict = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=lambda: now[0], sleep=_stalling(now), settle_s=0.0)
+    strict._ramps = lambda tangents, step_s: (0.0, 0.0)
+    refused = strict.run(
+        states, actions, tools, tool_at=arm.tool_at, velocities=velocities, through_states=True, transport="path"
+    )
+    assert refused.refused == 1 and "acceleration reaches 260 rad/s^2" in refused.reason
+
+
+def test_a_run_up_is_undone_when_the_driver_cannot_follow_a_path():
+    """The arm waits at the run-up's start; a server without timed paths gets the stream,
+    from the first frame's joints."""
+    states, actions, velocities, tools = _moving_episode(n=5)
+    now = [0.0]
+    arm, lines = _PathArm(now, supported=False), []
+    replay = EpisodeReplay(
+        arm, 10.0, stream_rate=10.0, clock=lambda: now[0], sleep=_stalling(now, stall_s=0.0), log=lines.append
+    )
+    report = replay.run(
+        states,
+        actions,
+        tools,
+        tool_at=lambda moment: None,
+        velocities=velocities,
+        through_states=True,
+        transport="path",
+    )
+    moves = [call[1] for call in arm.calls if call[0] == "move_j"]
+    assert report.transport == "stream" and len(moves) == 2 and report.run_up_ms == 0.0
+    assert moves[0][0] < states[0, 0] and moves[1] == pytest.approx(list(states[0, :3]))
+
+
+def test_a_replay_refuses_a_ramp_acceleration_that_is_no_positive_number():
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="ramp_acceleration"):
+            EpisodeReplay(_Arm(), 10.0, ramp_acceleration=bad)
