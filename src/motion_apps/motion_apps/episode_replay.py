@@ -264,7 +264,17 @@ class EpisodeReplay:
             last = int(np.ceil(steps + ramps[1] - lead + first - 1e-9))
             targets = [self._target(joints, tangents, k - first, lead, steps, ramps) for k in range(last + 1)]
             start = targets[0]
-        self.client.move_j([float(v) for v in start])
+        try:
+            self.client.move_j([float(v) for v in start])
+        except Exception as exc:  # noqa: BLE001 - a start the server refuses (a run-up past a limit) is reported
+            report.refused += 1
+            where = (
+                f"the run-up's start, {report.run_up_ms:.0f} ms before the first frame"
+                if report.run_up_ms
+                else "the first frame"
+            )
+            report.reason = f"MOVE_J to {where}: {exc}"
+            return report
         gripper = bool(states[0, dof] > 0.5)
         self.client.set_gripper(gripper)
         self.sleep(self.settle_s)

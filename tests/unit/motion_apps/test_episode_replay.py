@@ -702,3 +702,20 @@ def test_a_replay_refuses_a_ramp_acceleration_that_is_no_positive_number():
     for bad in (0.0, -1.0, float("nan")):
         with pytest.raises(ValueError, match="ramp_acceleration"):
             EpisodeReplay(_Arm(), 10.0, ramp_acceleration=bad)
+
+
+def test_a_run_up_start_the_server_refuses_is_reported():
+    states, actions, velocities, tools = _moving_episode()
+    now = [0.0]
+    arm = _PathArm(now)
+
+    def refuse(joints):
+        raise RuntimeError("MOVE_J refused: JOINT_LIMIT")
+
+    arm.move_j = refuse
+    replay = EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=_stalling(now, stall_s=0.0), settle_s=0.0)
+    report = replay.run(
+        states, actions, tools, tool_at=arm.tool_at, velocities=velocities, through_states=True, transport="path"
+    )
+    assert report.refused == 1 and arm.paths == []
+    assert report.reason == "MOVE_J to the run-up's start, 65 ms before the first frame: MOVE_J refused: JOINT_LIMIT"
