@@ -45,16 +45,24 @@ ONCE as a timed joint path (FOLLOW_PATH) that the driver samples by its own cloc
 the path's velocity fed forward: client or server stalls can no longer bend it, and the
 arm is on the path at the path's times (no servo lag: the recorded joints are sent at
 their frames' moments, the actions that recorded lag late). The tool is measured
-afterwards at the path's start (the server's stamp) plus each frame's time. The gripper
+afterwards at the path's start (the server's stamp) plus each frame's time (and the
+run-up, below). The gripper
 changes go out meanwhile on ``gripper_client`` (a second connection: the path blocks its
 own). A server whose driver cannot follow a path (NOT_SUPPORTED) gets the stream instead,
-and ``log`` says so. A timed path starts and ends at rest, but an episode may begin or end
-in motion (recording started or stopped while the arm moved): the path then gets a run-up,
-from rest at constant acceleration (``ramp_acceleration``) onto the first frame's velocity,
-and a run-out, from the last frame's velocity to rest, past the episode's ends; the arm is
-MOVE_J'd to the run-up's start. Without them the driver would have to reach the first
-frame's speed within one 10 ms sample (0.65 rad/s takes 260 rad/s^2, over a driver's 200),
-and it refuses such a path whole.
+and ``log`` says so.
+
+A timed path starts and ends at rest, but an episode may begin or end in motion (recording
+started or stopped while the arm moved; through the actions with Catmull-Rom's tangents,
+whenever the arm moves by the second frame): the path then gets a run-up, from rest at
+constant acceleration onto the first frame's velocity, and a run-out, from the last frame's
+velocity to rest, past the episode's ends; the arm is MOVE_J'd to the run-up's start, and
+the frames are measured at the path's start plus the run-up plus their time. Without them
+the driver would have to reach the first frame's speed within one 10 ms sample (0.65 rad/s
+takes 260 rad/s^2, over a driver's 200), and it refuses such a path whole. The fastest
+joint accelerates at ``ramp_acceleration``, or faster (up to ``RAMP_MOST_ACCELERATION``)
+where that would take it more than ``RAMP_DISTANCE`` from the frame; an end that would
+still need more than twice that (over 3.2 rad/s: past any driver's speed) is refused before
+the arm moves.
 
 The lag that matters is the REPLAYING arm's behind its stream, not the recorded one's: with
 ``stream_lag`` (a ``StreamLag`` fed by the caller with the arm's stamped joint samples) the
@@ -73,7 +81,15 @@ import numpy as np
 from hw_interface.path_call import PathCall
 from hw_interface.protocol import Result
 
-__all__ = ["EpisodeReplay", "ReplayReport", "LEAD_CHANGE_S", "RAMP_ACCELERATION"]
+__all__ = [
+    "EpisodeReplay",
+    "ReplayReport",
+    "LEAD_CHANGE_S",
+    "RAMP_ACCELERATION",
+    "RAMP_DISTANCE",
+    "RAMP_MOST_ACCELERATION",
+    "RAMP_REST_SPEED",
+]
 
 #: The most the stream's lead moves toward a measured lag in one step (s): 0.1 ms a 10 ms
 #: step, the targets' time running 1 % fast or slow while it moves (2 mm of lead in 0.2 s).
@@ -82,6 +98,15 @@ LEAD_CHANGE_S = 0.0001
 #: 5 % of the drivers' 200, leaving the cubic between samples room; 0.65 rad/s is reached
 #: in 65 ms over 0.021 rad.
 RAMP_ACCELERATION = 10.0
+#: rad: the farthest a run-up or run-out takes the fastest joint from its frame at
+#: ``RAMP_ACCELERATION``; a faster end accelerates harder (2.24 rad/s and over)...
+RAMP_DISTANCE = 0.05
+#: rad/s^2: ... up to this (a quarter of the drivers' 200; the cubic between 10 ms samples
+#: of a ramp peaks at under 2.8 times it).
+RAMP_MOST_ACCELERATION = 50.0
+#: rad/s: an end whose joints all move slower than this is at rest (no ramp: its speed
+#: step costs the path's first 10 ms under 0.4 rad/s^2).
+RAMP_REST_SPEED = 0.001
 
 
 @dataclass
@@ -159,8 +184,8 @@ class EpisodeReplay:
         self.settle_s = settle_s
         self.lead_s = float(lead_s)
         self.log = log
-        if not ramp_acceleration > 0.0:
-            raise ValueError(f"ramp_acceleration {ramp_acceleration!r}: a positive rad/s^2")
+        if not 0.0 < ramp_acceleration < np.inf:
+            raise ValueError(f"ramp_acceleration {ramp_acceleration!r}: a positive, finite rad/s^2")
         self.ramp_acceleration = float(ramp_acceleration)
 
     @staticmethod
@@ -244,6 +269,9 @@ class EpisodeReplay:
             tangents = np.asarray(velocities, dtype=np.float64)[:, :dof] * self.period
             if tangents.shape != joints.shape:
                 raise ValueError(f"velocities of shape {np.shape(velocities)} for {joints.shape} joint targets")
+        bad = np.flatnonzero(~np.all(np.isfinite(joints), axis=1) | ~np.all(np.isfinite(tangents), axis=1))
+        if bad.size:
+            raise ValueError(f"frame {bad[0]}'s joints or velocities are not finite")
         steps = (len(actions) - 1) * self.substeps  # the stream's last step: the last frame's targets
         step_s = self.period / self.substeps
         start = np.asarray(states[0, :dof], dtype=np.float64)
@@ -256,7 +284,18 @@ class EpisodeReplay:
             lead_s = self.lead_s - lag
             report.lead_ms = report.lead_ms_start = 1000.0 * lead_s
             lead = round(lead_s / step_s, 9)
-            ramps = self._ramps(tangents, step_s)
+            ramps = []
+            for end, tangent in (("first", tangents[0]), ("last", tangents[-1])):
+                duration, distance = self._ramp(tangent)
+                if distance > 2.0 * RAMP_DISTANCE:
+                    report.refused += 1
+                    report.reason = (
+                        f"the {end} frame's joints move at up to {np.max(np.abs(tangent)) / self.period:.2f} rad/s: "
+                        f"a timed path starts and ends at rest, and a ramp to that speed takes {distance:.3f} rad, "
+                        f"over {2.0 * RAMP_DISTANCE:g} (--transport stream replays it)"
+                    )
+                    return report
+                ramps.append(duration / step_s)
             report.run_up_ms, report.run_out_ms = (1000.0 * step_s * r for r in ramps)
             # Path sample k is the curve ``first`` steps before frame 0's step: from rest at
             # the run-up's start (or before it) to rest at the run-out's end (or after it).
@@ -264,16 +303,8 @@ class EpisodeReplay:
             last = int(np.ceil(steps + ramps[1] - lead + first - 1e-9))
             targets = [self._target(joints, tangents, k - first, lead, steps, ramps) for k in range(last + 1)]
             start = targets[0]
-        try:
-            self.client.move_j([float(v) for v in start])
-        except Exception as exc:  # noqa: BLE001 - a start the server refuses (a run-up past a limit) is reported
-            report.refused += 1
-            where = (
-                f"the run-up's start, {report.run_up_ms:.0f} ms before the first frame"
-                if report.run_up_ms
-                else "the first frame"
-            )
-            report.reason = f"MOVE_J to {where}: {exc}"
+        where = f"the run-up's start, {report.run_up_ms:.0f} ms before the first frame"
+        if not self._move_to(start, where if report.run_up_ms else "the first frame", report):
             return report
         gripper = bool(states[0, dof] > 0.5)
         self.client.set_gripper(gripper)
@@ -299,8 +330,9 @@ class EpisodeReplay:
                     return report
                 self.log(f"replay_episode: the server cannot follow a timed path ({exc}): streaming SET_JOINTS instead")
                 report.run_up_ms = report.run_out_ms = 0.0
-                if ramps[0] > 0.0:  # the arm waits at the run-up's start: the stream begins at the first frame
-                    self.client.move_j([float(v) for v in states[0, :dof]])
+                if not np.array_equal(start, states[0, :dof]):  # the stream begins at the first frame's joints
+                    if not self._move_to(states[0, :dof], "the first frame", report):
+                        return report
                     self.sleep(self.settle_s)
         lead_s = self.lead_s + (self.recorded_lag(states, actions, velocities) if through_states else 0.0)
         report.lead_ms = report.lead_ms_start = 1000.0 * lead_s
@@ -355,11 +387,29 @@ class EpisodeReplay:
         report.unmeasured = len(pending)
         return report
 
-    def _ramps(self, tangents: np.ndarray, step_s: float) -> tuple[float, float]:
-        """(run-up, run-out) in steps: the time, at ``ramp_acceleration``, from rest to the
-        first frame's velocity and from the last frame's velocity to rest (its fastest joint)."""
-        up, down = (float(np.max(np.abs(tangents[i]))) / self.period / self.ramp_acceleration for i in (0, -1))
-        return up / step_s, down / step_s
+    def _move_to(self, joints, where: str, report: ReplayReport) -> bool:
+        """MOVE_J to ``joints``; a refusal by the server (a run-up's start past a joint
+        limit) is the report's reason, and False. Anything else (a lost connection) raises."""
+        try:
+            self.client.move_j([float(v) for v in joints])
+        except Exception as exc:
+            if getattr(exc, "result", None) is None:
+                raise
+            report.refused += 1
+            report.reason = f"MOVE_J to {where}: {exc}"
+            return False
+        return True
+
+    def _ramp(self, tangent: np.ndarray) -> tuple[float, float]:
+        """(duration s, distance rad) of the ramp between rest and the velocity ``tangent``
+        (a change per frame), for its fastest joint: at ``ramp_acceleration``, or faster
+        (to ``RAMP_MOST_ACCELERATION``) to stay within ``RAMP_DISTANCE``; none at rest."""
+        speed = float(np.max(np.abs(tangent))) / self.period
+        if speed < RAMP_REST_SPEED:
+            return 0.0, 0.0
+        most = max(self.ramp_acceleration, RAMP_MOST_ACCELERATION)
+        acceleration = min(max(self.ramp_acceleration, speed * speed / (2.0 * RAMP_DISTANCE)), most)
+        return speed / acceleration, speed * speed / (2.0 * acceleration)
 
     def _target(self, joints, tangents, step, lead, steps, ramps=None) -> np.ndarray:
         """The curve's target at ``step`` run ``lead`` steps ahead (the first frame's before
@@ -397,7 +447,7 @@ class EpisodeReplay:
         for frame in range(1, len(actions)):
             closed = bool(actions[frame, dof] > 0.5)
             if closed != gripper:
-                changes.append((offset_s + max(frame * self.period - lead_s, 0.0), closed))
+                changes.append((max(offset_s + frame * self.period - lead_s, 0.0), closed))
                 gripper = closed
         side = gripper_client or self.client
         try:

@@ -446,8 +446,8 @@ def test_a_replay_over_a_timed_path_is_not_bent_by_a_stalled_client():
     assert summary["transport"] == "path" and len(arm.paths) == 1 and summary["compared"] == len(states) - 1
     times, joints = arm.paths[0]
     np.testing.assert_allclose(np.diff(times), 0.01)
-    first = int(np.argmin(np.linalg.norm(joints[:20] - states[0, :3], axis=1)))  # after the run-up
-    assert first > 0 and report.run_up_ms > 0.0  # the episode starts in motion
+    first = int(np.ceil(report.run_up_ms / 10.0 - 1e-9))  # the samples before frame 0: the run-up's
+    assert first > 0  # the episode starts in motion
     # the recorded joints at their frames
     np.testing.assert_allclose(joints[first::10][: len(states)], states[:, :3], atol=1e-9)
     assert summary["tool_error_mm_max"] < 0.01
@@ -668,54 +668,189 @@ def test_an_episode_that_starts_and_ends_in_motion_gets_a_run_up_and_a_run_out()
 
     # Without the run-up the same path is refused, with the reason the driver gives.
     strict = EpisodeReplay(arm, 10.0, stream_rate=100.0, clock=lambda: now[0], sleep=_stalling(now), settle_s=0.0)
-    strict._ramps = lambda tangents, step_s: (0.0, 0.0)
+    strict._ramp = lambda tangent: (0.0, 0.0)
     refused = strict.run(
         states, actions, tools, tool_at=arm.tool_at, velocities=velocities, through_states=True, transport="path"
     )
     assert refused.refused == 1 and "acceleration reaches 260 rad/s^2" in refused.reason
 
 
+def _refusal(message, result=7):
+    """An error as the commander client raises it for a server's refusal (with a result)."""
+    error = RuntimeError(message)
+    error.result = result
+    return error
+
+
 def test_a_run_up_is_undone_when_the_driver_cannot_follow_a_path():
     """The arm waits at the run-up's start; a server without timed paths gets the stream,
-    from the first frame's joints."""
+    from the first frame's joints, and a refusal of that move is reported."""
     states, actions, velocities, tools = _moving_episode(n=5)
     now = [0.0]
     arm, lines = _PathArm(now, supported=False), []
     replay = EpisodeReplay(
         arm, 10.0, stream_rate=10.0, clock=lambda: now[0], sleep=_stalling(now, stall_s=0.0), log=lines.append
     )
-    report = replay.run(
-        states,
-        actions,
-        tools,
-        tool_at=lambda moment: None,
-        velocities=velocities,
-        through_states=True,
-        transport="path",
-    )
+    run = dict(tool_at=lambda moment: None, velocities=velocities, through_states=True, transport="path")
+    report = replay.run(states, actions, tools, **run)
     moves = [call[1] for call in arm.calls if call[0] == "move_j"]
-    assert report.transport == "stream" and len(moves) == 2 and report.run_up_ms == 0.0
-    assert moves[0][0] < states[0, 0] and moves[1] == pytest.approx(list(states[0, :3]))
+    assert report.transport == "stream" and len(moves) == 2 and report.run_up_ms == report.run_out_ms == 0.0
+    np.testing.assert_allclose(moves[0][0], states[0, 0] - 0.65 * 0.065 / 2)
+    assert moves[1] == pytest.approx(list(states[0, :3])) and arm.sent == 5
+
+    arm = _PathArm(now, supported=False)
+    moved = []
+
+    def second_refused(joints):
+        moved.append(joints)
+        if len(moved) == 2:
+            raise _refusal("MOVE_J refused: WORKSPACE")
+
+    arm.move_j = second_refused
+    report = EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=_stalling(now, stall_s=0.0), log=lines.append).run(
+        states, actions, tools, **run
+    )
+    assert report.refused == 1 and report.reason == "MOVE_J to the first frame: MOVE_J refused: WORKSPACE"
+    assert arm.sent == 0
 
 
 def test_a_replay_refuses_a_ramp_acceleration_that_is_no_positive_number():
-    for bad in (0.0, -1.0, float("nan")):
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
         with pytest.raises(ValueError, match="ramp_acceleration"):
             EpisodeReplay(_Arm(), 10.0, ramp_acceleration=bad)
 
 
-def test_a_run_up_start_the_server_refuses_is_reported():
+def test_a_run_up_start_the_server_refuses_is_reported_and_a_lost_server_raises():
     states, actions, velocities, tools = _moving_episode()
     now = [0.0]
     arm = _PathArm(now)
+    run = dict(tool_at=arm.tool_at, velocities=velocities, through_states=True, transport="path")
 
     def refuse(joints):
-        raise RuntimeError("MOVE_J refused: JOINT_LIMIT")
+        raise _refusal("MOVE_J refused: JOINT_LIMIT")
 
     arm.move_j = refuse
     replay = EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=_stalling(now, stall_s=0.0), settle_s=0.0)
-    report = replay.run(
-        states, actions, tools, tool_at=arm.tool_at, velocities=velocities, through_states=True, transport="path"
-    )
+    report = replay.run(states, actions, tools, **run)
     assert report.refused == 1 and arm.paths == []
     assert report.reason == "MOVE_J to the run-up's start, 65 ms before the first frame: MOVE_J refused: JOINT_LIMIT"
+
+    def lost(joints):
+        raise ConnectionError("service motion_controller unavailable")
+
+    arm.move_j = lost
+    with pytest.raises(ConnectionError):
+        replay.run(states, actions, tools, **run)
+
+
+def test_a_run_up_with_a_lead_and_through_the_actions_keeps_the_frames_at_their_moments():
+    """The UR driver's 30 ms lead (the path starts earlier on the curve) and the actions'
+    path (the recorded lag late) with a run-up: the driver accepts both, the MOVE_J goes to
+    the path's first sample, and every frame's tool is where it was recorded."""
+    states, actions, velocities, tools = _moving_episode()
+    for lead_s, through_states in ((0.03, True), (0.0, False)):
+        now = [0.0]
+        arm = _CheckingPathArm(now)
+        replay = EpisodeReplay(
+            arm, 10.0, clock=lambda now=now: now[0], sleep=_stalling(now, stall_s=0.0), settle_s=0.0, lead_s=lead_s
+        )
+        report = replay.run(
+            states,
+            actions,
+            tools,
+            tool_at=arm.tool_at,
+            velocities=velocities if through_states else None,
+            through_states=through_states,
+            measured_velocities=velocities,
+            transport="path",
+        )
+        summary = report.summary()
+        assert summary["refused"] == 0, summary["reason"]
+        times, joints = arm.paths[0]
+        np.testing.assert_allclose(arm.calls[0][1], joints[0])
+        # at rest at the run-out's end: 0.65 rad/s to rest at 10 rad/s^2, 21 mrad past the last frame
+        np.testing.assert_allclose(joints[-1, 0], states[-1, 0] + 0.65 * 0.065 / 2, atol=1e-9)
+        # the tool at each frame's moment: the recorded one, the lead's distance ahead
+        assert summary["compared"] == len(states) - 1
+        assert summary["tool_error_mm_max"] == pytest.approx(1000 * 0.65 * lead_s * np.sqrt(1.25), abs=0.01)
+
+
+def test_the_gripper_closes_when_the_path_reaches_its_frame_whatever_the_lead():
+    """The gripper changes at a frame of a moving episode; the path (run-up, then the curve
+    ``lead`` ahead) reaches that frame's joints at the run-up plus the frame's time minus the
+    lead (for a lead over a frame, before the run-up ends), and the gripper goes out then on
+    the side connection."""
+    states, actions, velocities, tools = _moving_episode()
+    for lead_s, frame in ((0.0, 10), (0.03, 10), (0.25, 1)):
+        actions = actions.copy()
+        actions[:, 3] = 0.0
+        actions[frame:, 3] = 1.0
+        now = [0.0]
+        arm, side = _PathArm(now), _Arm()
+        closed = threading.Event()
+        sent = {}
+
+        def follow(times, joints, arm=arm, closed=closed, now=now, sent=sent):
+            sent["at"] = now[0]
+            started = _PathArm.follow_path(arm, times, joints)
+            assert closed.wait(5.0), "the gripper never closed"
+            return started
+
+        def close(state, side=side, closed=closed, now=now):
+            side.calls.append(("gripper", state, now[0]))
+            closed.set()
+
+        arm.follow_path, side.set_gripper = follow, close
+        replay = EpisodeReplay(
+            arm, 10.0, clock=lambda now=now: now[0], sleep=_stalling(now, stall_s=0.0), settle_s=0.0, lead_s=lead_s
+        )
+        report = replay.run(
+            states,
+            actions,
+            tools,
+            tool_at=arm.tool_at,
+            velocities=velocities,
+            through_states=True,
+            transport="path",
+            gripper_client=side,
+        )
+        assert report.refused == 0, report.reason
+        times, joints = arm.paths[0]
+        ((_, state, at),) = side.calls
+        sample = int(round((at - sent["at"]) / 0.01))
+        assert state is True
+        np.testing.assert_allclose(joints[sample], states[frame, :3], atol=0.65 * 0.0101)  # within a 10 ms slice
+
+
+def test_an_end_too_fast_for_a_ramp_is_refused_before_the_arm_moves_and_a_fast_one_ramps_harder():
+    states, actions, velocities, tools = _moving_episode(speed=4.0)
+    now = [0.0]
+    arm = _CheckingPathArm(now)
+    replay = EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=_stalling(now, stall_s=0.0), settle_s=0.0)
+    run = dict(tool_at=arm.tool_at, velocities=velocities, through_states=True, transport="path")
+    report = replay.run(states, actions, tools, **run)
+    assert report.refused == 1 and arm.calls == [] and arm.paths == []
+    assert (
+        report.reason.startswith("the first frame's joints move at up to 4.00 rad/s") and "0.160 rad" in report.reason
+    )
+    # 2.9 rad/s: at 10 rad/s^2 the run-up would reach 0.42 rad back; at 50, 0.084 rad
+    states, actions, velocities, tools = _moving_episode(speed=2.9)
+    report = replay.run(states, actions, tools, **dict(run, velocities=velocities))
+    assert report.refused == 0, report.reason
+    assert report.run_up_ms == pytest.approx(1000 * 2.9 / 50.0)
+    np.testing.assert_allclose(arm.paths[0][1][0, 0], states[0, 0] - 2.9**2 / 100.0, atol=1e-9)
+
+
+def test_an_end_at_rest_gets_no_ramp_and_a_value_that_is_no_number_is_refused():
+    states, actions, velocities, tools = _moving_episode(speed=0.0005)  # under 1 mrad/s: at rest
+    now = [0.0]
+    arm = _CheckingPathArm(now)
+    replay = EpisodeReplay(arm, 10.0, clock=lambda: now[0], sleep=_stalling(now, stall_s=0.0), settle_s=0.0)
+    run = dict(tool_at=arm.tool_at, velocities=velocities, through_states=True, transport="path")
+    report = replay.run(states, actions, tools, **run)
+    assert report.run_up_ms == report.run_out_ms == 0.0 and len(arm.paths[0][0]) == 10 * (len(states) - 1) + 1
+    np.testing.assert_allclose(arm.calls[0][1], states[0, :3])
+    velocities = velocities.copy()
+    velocities[0, 1] = np.nan
+    with pytest.raises(ValueError, match="frame 0's joints or velocities are not finite"):
+        replay.run(states, actions, tools, **dict(run, velocities=velocities))
