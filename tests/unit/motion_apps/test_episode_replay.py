@@ -804,16 +804,8 @@ def test_the_gripper_closes_when_the_path_reaches_its_frame_whatever_the_lead():
         replay = EpisodeReplay(
             arm, 10.0, clock=lambda now=now: now[0], sleep=_stalling(now, stall_s=0.0), settle_s=0.0, lead_s=lead_s
         )
-        report = replay.run(
-            states,
-            actions,
-            tools,
-            tool_at=arm.tool_at,
-            velocities=velocities,
-            through_states=True,
-            transport="path",
-            gripper_client=side,
-        )
+        path = dict(velocities=velocities, through_states=True, transport="path", gripper_client=side)
+        report = replay.run(states, actions, tools, tool_at=arm.tool_at, **path)
         assert report.refused == 0, report.reason
         times, joints = arm.paths[0]
         ((_, state, at),) = side.calls
