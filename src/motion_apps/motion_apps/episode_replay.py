@@ -45,11 +45,10 @@ ONCE as a timed joint path (FOLLOW_PATH) that the driver samples by its own cloc
 the path's velocity fed forward: client or server stalls can no longer bend it, and the
 arm is on the path at the path's times (no servo lag: the recorded joints are sent at
 their frames' moments, the actions that recorded lag late). The tool is measured
-afterwards at the path's start (the server's stamp) plus each frame's time (and the
-run-up, below). The gripper
-changes go out meanwhile on ``gripper_client`` (a second connection: the path blocks its
-own). A server whose driver cannot follow a path (NOT_SUPPORTED) gets the stream instead,
-and ``log`` says so.
+afterwards at the path's start (the server's stamp) plus the run-up (below) plus each
+frame's time. The gripper changes go out meanwhile on ``gripper_client`` (a second
+connection: the path blocks its own). A server whose driver cannot follow a path
+(NOT_SUPPORTED) gets the stream instead, and ``log`` says so.
 
 A timed path starts and ends at rest, but an episode may begin or end in motion (recording
 started or stopped while the arm moved; through the actions with Catmull-Rom's tangents,
@@ -439,7 +438,8 @@ class EpisodeReplay:
         run-up); the gripper set meanwhile where the actions change it (at their frame's
         moment counted from when the path was sent, on the replay's clock: the path's start
         comes later by the service call's latency); then each frame's tool at the path's
-        start plus the frame's time. Leaving early (an error, Ctrl-C) STOPs the path."""
+        start plus ``offset_s`` plus the frame's time. Leaving early (an error, Ctrl-C)
+        STOPs the path."""
         dof = len(targets[0])
         times = [step * step_s for step in range(len(targets))]
         call = PathCall(self.client.follow_path, times, [[float(v) for v in t] for t in targets])
