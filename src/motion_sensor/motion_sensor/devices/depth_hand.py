@@ -59,7 +59,7 @@ from scipy.spatial.transform import Rotation
 
 from motion_common.params import Param, ParamSchema
 from motion_sensor.devices.camera_intrinsics import OPTICAL_TO_REP103, Intrinsics
-from motion_sensor.devices.depth_palm_model import PalmModel
+from motion_sensor.devices.depth_palm_model import MAX_OFFSET_M, PalmModel
 from motion_sensor.errors import MotionSensorError
 
 TRACKER_PARAMS = ParamSchema(
@@ -130,7 +130,7 @@ TRACKER_PARAMS = ParamSchema(
         ),
         Param(
             "palm_model_max_offset_m",
-            0.12,
+            MAX_OFFSET_M,
             unit="m",
             low=0,
             low_open=True,

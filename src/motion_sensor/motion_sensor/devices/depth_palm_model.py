@@ -39,6 +39,7 @@ __all__ = [
     "CROP_PX",
     "DEPTH_SCALE_M",
     "OFFSET_SCALE_M",
+    "MAX_OFFSET_M",
     "DEFAULT_MODEL",
     "PalmCrop",
     "crop_window",
@@ -52,6 +53,9 @@ CROP_M = 0.24  # a hand with its fingers spread and a little of the forearm
 CROP_PX = 32
 DEPTH_SCALE_M = 0.1
 OFFSET_SCALE_M = 0.05
+#: The farthest (m) a network's palm may be from the estimate and still be used: the
+#: crop's half side (a palm outside the crop the network saw is no answer of it).
+MAX_OFFSET_M = CROP_M / 2
 # A crop the blob covers less than this fraction of is no hand to correct (a hand at the
 # image's edge, mostly outside it).
 _MIN_COVER = 0.04
@@ -136,7 +140,7 @@ class PalmModel:
     """The exported network (input ``crop`` (n, 2, CROP_PX, CROP_PX), output ``offset``
     (n, 3)), single-threaded on the CPU."""
 
-    def __init__(self, model_path: str | None = None, max_offset_m: float = 0.12, weight: float = 1.0):
+    def __init__(self, model_path: str | None = None, max_offset_m: float = MAX_OFFSET_M, weight: float = 1.0):
         self.model_path = os.path.normpath(model_path or DEFAULT_MODEL)
         self.max_offset_m = float(max_offset_m)
         self.weight = float(weight)
